@@ -1,0 +1,1 @@
+"""ftplan: failure-tolerant motion planning for kinematically redundant arms."""

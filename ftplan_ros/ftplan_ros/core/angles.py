@@ -1,0 +1,20 @@
+"""Joint angles on the torus: wrapping to (-π, π] for joints without limits."""
+
+import numpy as np
+
+
+def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
+    """Wrap angles [rad] to (-π, π]."""
+    return np.pi - np.mod(np.pi - np.asarray(angle, dtype=float), 2.0 * np.pi)
+
+
+def wrap_configuration(thetas: np.ndarray, periodic: np.ndarray) -> np.ndarray:
+    """Wrap the periodic components of configurations (..., n) [rad] to (-π, π]."""
+    thetas = np.asarray(thetas, dtype=float)
+    return np.where(periodic, wrap_angle(thetas), thetas)
+
+
+def configuration_difference(a: np.ndarray, b: np.ndarray, periodic: np.ndarray) -> np.ndarray:
+    """Shortest joint-space step a - b (..., n) [rad], going round for periodic joints."""
+    diff = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+    return np.where(periodic, wrap_angle(diff), diff)

@@ -1,0 +1,225 @@
+"""Steps 5 and 6 of the paper: the failure surface S_F as a web of joint-space paths.
+
+The web fans out from θ_s: path k runs straight (hence monotonically in every joint) from
+θ_s to goal point g_k, and goal points follow each other along an arc of M_g^F, so
+adjacent paths are joined by straight rungs at equal waypoint index. Every quad of the
+web is split into two triangles; the triangles, as patches of joint space, are S_F.
+
+Among the goal points are the exact failure-plane hits θ_{H_i}: the path to θ_{H_i} keeps
+θ_i = θ_s,i exactly. That path, the nominal path (monotonic) and the bottom row (all θ_s)
+are what make a recovery path exist for every lock (see `recovery.py`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .failure_planes import FailurePlaneHit
+
+
+@dataclass(frozen=True, eq=False)
+class FailureSurface:
+    """S_F: `paths` (K, W+1, n) [rad], path k from θ_s (waypoint 0) to goal point k.
+
+    `nominal` is the index of the path the arm follows; `hit_paths[i]` is the path to the
+    failure-plane hit of joint i, on which θ_i stays θ_s,i.
+    """
+
+    paths: np.ndarray
+    nominal: int
+    hit_paths: tuple[int, ...]
+
+    @property
+    def theta_s(self) -> np.ndarray:
+        """The start configuration θ_s (n,) [rad]."""
+        return self.paths[0, 0]
+
+    @property
+    def goal_points(self) -> np.ndarray:
+        """The web's points of M_g^F (K, n) [rad], in order along the goal arc."""
+        return self.paths[:, -1]
+
+    @property
+    def nominal_path(self) -> np.ndarray:
+        """The nominal joint path (W+1, n) [rad] from θ_s to a goal configuration."""
+        return self.paths[self.nominal]
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """All web points (K·(W+1), n) [rad]; vertex k·(W+1) + w is waypoint w of path k."""
+        return self.paths.reshape(-1, self.paths.shape[-1])
+
+    @cached_property
+    def triangles(self) -> np.ndarray:
+        """(T, 3) vertex indices: each quad (k, w)-(k+1, w+1) as two triangles."""
+        n_paths, n_points = self.paths.shape[:2]
+        k, w = np.meshgrid(np.arange(n_paths - 1), np.arange(n_points - 1), indexing='ij')
+        v00 = (k * n_points + w).ravel()
+        v10, v01 = v00 + n_points, v00 + 1
+        v11 = v10 + 1
+        return np.concatenate([np.stack([v00, v10, v11], axis=1),
+                               np.stack([v00, v11, v01], axis=1)])
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """(E, 2) vertex-index pairs, lower first: path edges, then rungs, then diagonals.
+
+        Path edge (k, w) joins waypoints w, w+1 of path k; rung (k, w) joins path k and
+        k+1 at waypoint w; diagonal (k, w) joins (k, w) and (k+1, w+1).
+        """
+        n_paths, n_points = self.paths.shape[:2]
+        vertex = np.arange(n_paths * n_points).reshape(n_paths, n_points)
+        along = np.stack([vertex[:, :-1].ravel(), vertex[:, 1:].ravel()], axis=1)
+        rungs = np.stack([vertex[:-1, :].ravel(), vertex[1:, :].ravel()], axis=1)
+        diagonals = np.stack([vertex[:-1, :-1].ravel(), vertex[1:, 1:].ravel()], axis=1)
+        return np.concatenate([along, rungs, diagonals])
+
+    def path_edge(self, k: np.ndarray | int, w: np.ndarray | int) -> np.ndarray | int:
+        """Index into `edges` of the edge from waypoint w to w+1 of path k."""
+        return k * (self.paths.shape[1] - 1) + w
+
+    def rung_edge(self, k: np.ndarray | int, w: np.ndarray | int) -> np.ndarray | int:
+        """Index into `edges` of the rung from path k to path k+1 at waypoint w."""
+        n_paths, n_points = self.paths.shape[:2]
+        return n_paths * (n_points - 1) + k * n_points + w
+
+    def diagonal_edge(self, k: np.ndarray | int, w: np.ndarray | int) -> np.ndarray | int:
+        """Index into `edges` of the diagonal from (k, w) to (k+1, w+1)."""
+        n_paths, n_points = self.paths.shape[:2]
+        return n_paths * (n_points - 1) + (n_paths - 1) * n_points + k * (n_points - 1) + w
+
+    @cached_property
+    def triangle_ranges(self) -> tuple[np.ndarray, np.ndarray]:
+        """(T, n) smallest and largest value [rad] of each joint over each triangle's corners."""
+        corners = self.vertices[self.triangles]
+        return corners.min(axis=1), corners.max(axis=1)
+
+    def triangles_beside_path_edge(self, k: int, w: int) -> list[int]:
+        """List the (one or two) triangles that have path k's edge (w, w+1) as a side."""
+        n_paths, n_points = self.paths.shape[:2]
+        quads = (n_paths - 1) * (n_points - 1)
+        beside = []
+        if k >= 1:  # the lower triangle of quad (k-1, w) has it as its side v1v2
+            beside.append((k - 1) * (n_points - 1) + w)
+        if k <= n_paths - 2:  # the upper triangle of quad (k, w) has it as its side v2v0
+            beside.append(quads + k * (n_points - 1) + w)
+        return beside
+
+    @cached_property
+    def triangle_edges(self) -> np.ndarray:
+        """(T, 3) indices into `edges` of each triangle's edges (v0v1, v1v2, v2v0)."""
+        n_paths, n_points = self.paths.shape[:2]
+        k, w = np.meshgrid(np.arange(n_paths - 1), np.arange(n_points - 1), indexing='ij')
+        k, w = k.ravel(), w.ravel()
+        lower = np.stack([self.rung_edge(k, w), self.path_edge(k + 1, w),
+                          self.diagonal_edge(k, w)], axis=1)
+        upper = np.stack([self.diagonal_edge(k, w), self.rung_edge(k, w + 1),
+                          self.path_edge(k, w)], axis=1)
+        return np.concatenate([lower, upper])
+
+    def to_dict(self) -> dict:
+        """Return the contract's `failure_surface` JSON object (radians)."""
+        return {'paths': self.paths.tolist(), 'nominal': self.nominal,
+                'hit_paths': list(self.hit_paths)}
+
+
+def lift_goal_arc(theta_s: np.ndarray, arc_points: np.ndarray,
+                  hits: list[FailurePlaneHit], periodic: np.ndarray,
+                  ) -> tuple[np.ndarray, list[FailurePlaneHit]]:
+    """Shift the arc (a, n) and its hits by whole turns so hit i has θ_i = θ_s,i exactly.
+
+    Joint i's shift is set by its own hit alone, so every hit can be met at once; joints
+    with limits never shift.
+    """
+    shift = np.zeros(len(theta_s))
+    for hit in hits:
+        i = hit.joint
+        if periodic[i]:
+            shift[i] = 2.0 * np.pi * np.round((theta_s[i] - hit.theta[i]) / (2.0 * np.pi))
+    lifted = []
+    for hit in hits:
+        theta = hit.theta + shift
+        theta[hit.joint] = theta_s[hit.joint]
+        lifted.append(FailurePlaneHit(hit.joint, theta, hit.position))
+    return arc_points + shift, lifted
+
+
+def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
+                          hits: list[FailurePlaneHit], window: tuple[float, float],
+                          column_spacing: float, waypoint_spacing: float) -> FailureSurface:
+    """Build S_F (Steps 5-6): the web from θ_s (n,) to the lifted arc (a, n) within a window.
+
+    `window` (first, last) are positions along the arc (units of arc points) that contain
+    every hit; goal points are the arc points inside it, thinned to about
+    `column_spacing` [rad] apart, plus the exact hits, one per joint. Paths get enough
+    waypoints that neighbours are at most `waypoint_spacing` [rad] apart in every joint.
+    The nominal path is the one to the goal point nearest the window's middle.
+    """
+    first, last = window
+    inside = np.arange(int(np.ceil(first)), int(np.floor(last)) + 1)
+    columns = [(float(k), arc_points[k], None)
+               for k in _thin(arc_points, inside, column_spacing)]
+    columns += [(hit.position, hit.theta, hit.joint) for hit in hits]
+    columns.sort(key=lambda column: column[0])
+    goals = np.array([theta for _, theta, _ in columns])
+    hit_paths = tuple(next(slot for slot, column in enumerate(columns) if column[2] == i)
+                      for i in range(len(theta_s)))
+    span = np.max(np.abs(goals - theta_s))
+    n_steps = max(1, int(np.ceil(span / waypoint_spacing)))
+    fractions = np.arange(n_steps + 1) / n_steps
+    paths = theta_s + fractions[None, :, None] * (goals - theta_s)[:, None, :]
+    paths[:, 0] = theta_s  # exactly, so the bottom row is one point
+    middle = 0.5 * (first + last)
+    nominal = min(range(len(columns)), key=lambda slot: abs(columns[slot][0] - middle))
+    return FailureSurface(paths, nominal, hit_paths)
+
+
+def smallest_windows(hits: list[list[FailurePlaneHit]]) -> list[tuple[float, float]]:
+    """Minimal arc windows (first, last) holding at least one hit of every joint, shortest first.
+
+    The classic two-pointer sweep over hits sorted by position: for each left hit, the
+    nearest right end that completes the set of joints.
+    """
+    flat = sorted((hit.position, hit.joint) for joint_hits in hits for hit in joint_hits)
+    n_joints = len(hits)
+    windows = set()
+    counts: dict[int, int] = {}
+    right = 0
+    for left in range(len(flat)):
+        while len(counts) < n_joints and right < len(flat):
+            counts[flat[right][1]] = counts.get(flat[right][1], 0) + 1
+            right += 1
+        if len(counts) < n_joints:
+            break
+        windows.add((flat[left][0], flat[right - 1][0]))
+        joint = flat[left][1]
+        counts[joint] -= 1
+        if counts[joint] == 0:
+            del counts[joint]
+    return sorted(windows, key=lambda w: w[1] - w[0])
+
+
+def choose_hits(hits: list[list[FailurePlaneHit]], window: tuple[float, float],
+                ) -> list[FailurePlaneHit]:
+    """One hit per joint inside the window: the one nearest its middle."""
+    middle = 0.5 * (window[0] + window[1])
+    chosen = []
+    for joint_hits in hits:
+        inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
+        chosen.append(min(inside, key=lambda h: abs(h.position - middle)))
+    return chosen
+
+
+def _thin(points: np.ndarray, indices: np.ndarray, spacing: float) -> np.ndarray:
+    """Keep indices from `indices` (consecutive) about `spacing` [rad] apart, ends included."""
+    if len(indices) <= 2:
+        return indices
+    steps = np.max(np.abs(np.diff(points[indices], axis=0)), axis=1)
+    travelled = np.concatenate([[0.0], np.cumsum(steps)])
+    bucket = np.floor(travelled / spacing)
+    keep = np.concatenate([[True], bucket[1:] != bucket[:-1]])
+    keep[-1] = True
+    return indices[keep]

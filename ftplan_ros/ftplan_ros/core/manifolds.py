@@ -1,0 +1,261 @@
+"""Steps 1 and 2 of the paper: self-motion manifolds and their obstacle-free parts.
+
+For one degree of redundancy (r = n - m = 1) the pre-image f^{-1}(x) is a union of curves
+(paper eq. 1). Each curve is traced by null-space continuation: a predictor step along the
+null vector of the Jacobian, a corrector that solves f(θ) = x on the hyperplane orthogonal
+to it, and step control. Seeds come from inverse-kinematics samples, so every connected
+branch is found; a branch that returns to its seed (on the torus of periodic joints) is a
+closed loop. Where branches cross at a singular configuration (x a critical value of f, as
+the paper's x_g = [1, 0]), continuation passes straight through and each branch is kept
+as its own curve.
+
+Configurations are (n,) [rad]; a branch's points are lifted (continuous across ±π).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import OrderedDict
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .angles import configuration_difference, wrap_configuration
+from .collision import CollisionChecker
+from .robot import Robot
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ManifoldOptions:
+    """Continuation settings (steps in joint space [rad], residuals [m])."""
+
+    step_max: float = 0.03
+    step_min: float = 1e-5
+    max_turn: float = 0.3  # largest tangent turn [rad] accepted in one step
+    tolerance: float = 1e-10
+    seeds: int = 48
+    max_points: int = 50_000
+
+
+@dataclass(frozen=True, eq=False)
+class SelfMotionManifold:
+    """One branch of the pre-image of `x` [m].
+
+    `points` (k, n) [rad] are lifted and at most `step_max` apart. A closed branch is a
+    loop: `points[0] + period` follows `points[-1]`, and `period` (n,) holds multiples of
+    2π for loops that go round a periodic joint. `clearance` (k,) [m] is filled by Step 2.
+    """
+
+    x: tuple[float, ...]
+    points: np.ndarray
+    closed: bool
+    period: np.ndarray
+    clearance: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def free(self, margin: float = 0.0) -> np.ndarray:
+        """(k,) bool: points whose clearance exceeds `margin` [m] (Step 2's M^F)."""
+        if self.clearance is None:
+            raise ValueError('clearance not computed: call mark_obstacle_free first')
+        return self.clearance > margin
+
+    def free_arcs(self, margin: float = 0.0) -> list[tuple[int, int]]:
+        """Maximal runs of free points as (first, count); on a loop a run may wrap past the end."""
+        free = self.free(margin)
+        k = len(free)
+        if free.all():
+            return [(0, k)]
+        runs = []
+        start = None
+        for idx in range(k):
+            if free[idx] and start is None:
+                start = idx
+            if not free[idx] and start is not None:
+                runs.append((start, idx - start))
+                start = None
+        if start is not None:
+            runs.append((start, k - start))
+        if self.closed and len(runs) > 1 and runs[0][0] == 0 and sum(runs[-1]) == k:
+            first, last = runs.pop(0), runs.pop()
+            runs.append((last[0], last[1] + first[1]))
+        return runs
+
+    def arc_points(self, first: int, count: int) -> np.ndarray:
+        """Return lifted points (count, n) [rad] of the run from index `first` (wraps on loops)."""
+        idx = np.arange(first, first + count)
+        laps = idx // len(self.points)
+        if laps.max() > 0 and not self.closed:
+            raise IndexError('an open branch has no points past its end')
+        return self.points[idx % len(self.points)] + laps[:, None] * self.period
+
+
+def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Generator,
+                                options: ManifoldOptions | None = None,
+                                ) -> tuple[SelfMotionManifold, ...]:
+    """Step 1: trace every branch of the pre-image of the end-effector position x (m,) [m]."""
+    options = options or ManifoldOptions()
+    x = np.asarray(x, dtype=float)
+    if robot.n_joints - robot.task_dim != 1:
+        raise ValueError('self-motion curves need exactly one degree of redundancy')
+    limits = robot.limits
+    seeds = rng.uniform(limits[:, 0], limits[:, 1], size=(options.seeds, robot.n_joints))
+    branches: list[SelfMotionManifold] = []
+    for seed in seeds:
+        theta = project_to_preimage(robot, x, seed, options.tolerance)
+        if theta is None or not _within_limits(robot, theta):
+            continue
+        theta = wrap_configuration(theta, robot.periodic)
+        if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
+            continue
+        branch = _trace_branch(robot, x, theta, options)
+        log.debug('branch %d: %d points, closed=%s', len(branches), len(branch), branch.closed)
+        branches.append(branch)
+    if not branches:
+        log.info('no configuration reaches %s', x)
+    return tuple(branches)
+
+
+class ManifoldCache:
+    """Traced branches by (robot, x, options): they do not depend on the obstacles.
+
+    A planner serving many requests for the same task among changing obstacles traces
+    M_s and M_g once; the least recently used entries beyond `size` are dropped.
+    """
+
+    def __init__(self, size: int = 16):
+        self.size = size
+        self._entries: OrderedDict = OrderedDict()
+
+    def trace(self, robot: Robot, x: np.ndarray, rng: np.random.Generator,
+              options: ManifoldOptions | None = None) -> tuple[SelfMotionManifold, ...]:
+        """`trace_self_motion_manifolds`, or its stored answer for the same arguments."""
+        options = options or ManifoldOptions()
+        key = (robot, tuple(float(v) for v in x), options)
+        if key in self._entries:
+            self._entries.move_to_end(key)
+            return self._entries[key]
+        branches = trace_self_motion_manifolds(robot, x, rng, options)
+        self._entries[key] = branches
+        if len(self._entries) > self.size:
+            self._entries.popitem(last=False)
+        return branches
+
+
+def mark_obstacle_free(manifold: SelfMotionManifold, checker: CollisionChecker,
+                       ) -> SelfMotionManifold:
+    """Step 2: return the branch with the clearance [m] of each of its points."""
+    return replace(manifold, clearance=checker.min_clearance(manifold.points))
+
+
+def project_to_preimage(robot: Robot, x: np.ndarray, theta: np.ndarray,
+                        tolerance: float = 1e-10, max_iterations: int = 60,
+                        fixed_joint: int | None = None) -> np.ndarray | None:
+    """Newton (damped least squares) from θ (n,) [rad] to a configuration with f(θ) = x.
+
+    With `fixed_joint` = i the step leaves θ_i alone, so the result lies in the failure
+    hyperplane H_i through θ. Returns None when it does not converge.
+    """
+    theta = np.array(theta, dtype=float)
+    movable = np.ones(robot.n_joints, dtype=bool)
+    if fixed_joint is not None:
+        movable[fixed_joint] = False
+    for _ in range(max_iterations):
+        residual = x - robot.forward_kinematics(theta)
+        if np.linalg.norm(residual) < tolerance:
+            return theta
+        jac = robot.jacobian(theta)[:, movable]
+        damping = 1e-6 if np.linalg.norm(residual) < 1e-3 else 1e-3
+        step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(len(x)), residual)
+        norm = np.linalg.norm(step)
+        if norm > 0.5:  # keep Newton local: long steps jump between branches
+            step *= 0.5 / norm
+        theta[movable] += step
+    return None
+
+
+def null_space_tangent(robot: Robot, theta: np.ndarray) -> np.ndarray:
+    """Return the unit null vector (n,) of the Jacobian at θ: the self-motion direction (r = 1)."""
+    return np.linalg.svd(robot.jacobian(theta))[2][-1]
+
+
+def _trace_branch(robot: Robot, x: np.ndarray, seed: np.ndarray,
+                  options: ManifoldOptions) -> SelfMotionManifold:
+    forward, closed, period = _continue(robot, x, seed, +1.0, options)
+    if closed:
+        return SelfMotionManifold(tuple(x), np.array(forward), True, period)
+    backward, _, _ = _continue(robot, x, seed, -1.0, options)
+    points = np.array(backward[:0:-1] + forward)
+    return SelfMotionManifold(tuple(x), points, False, np.zeros(robot.n_joints))
+
+
+def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
+              options: ManifoldOptions) -> tuple[list[np.ndarray], bool, np.ndarray]:
+    """Predictor-corrector from `seed` until the loop closes, a limit or a dead end."""
+    periodic = robot.periodic
+    tangent = direction * null_space_tangent(robot, seed)
+    seed_tangent = tangent
+    points = [seed]
+    theta = seed
+    step = options.step_max
+    travelled = 0.0
+    while len(points) < options.max_points:
+        corrected = _correct(robot, x, theta + step * tangent, tangent, options.tolerance)
+        new_tangent = None
+        if corrected is not None:
+            new_tangent = null_space_tangent(robot, corrected)
+            new_tangent *= np.sign(new_tangent @ tangent) or 1.0
+            moved = np.linalg.norm(corrected - theta)
+            if new_tangent @ tangent < np.cos(options.max_turn) or moved > 1.5 * step:
+                corrected = None
+        if corrected is None:
+            step *= 0.5
+            if step < options.step_min:
+                log.debug('continuation stalled at %s', theta)
+                return points, False, np.zeros(robot.n_joints)
+            continue
+        if not _within_limits(robot, corrected):
+            return points, False, np.zeros(robot.n_joints)
+        travelled += np.linalg.norm(corrected - theta)
+        theta, tangent = corrected, new_tangent
+        points.append(theta)
+        gap = configuration_difference(theta, seed, periodic)
+        if (travelled > 3.0 * options.step_max and np.linalg.norm(gap) < options.step_max
+                and tangent @ seed_tangent > np.cos(options.max_turn)):
+            # Back at the seed: the closing chord to seed + period is shorter than a step.
+            period = np.where(periodic, theta - gap - seed, 0.0)
+            period = 2.0 * np.pi * np.round(period / (2.0 * np.pi))
+            return points, True, period
+        step = min(step * 1.5, options.step_max)
+    raise RuntimeError(f'self-motion continuation exceeded {options.max_points} points')
+
+
+def _correct(robot: Robot, x: np.ndarray, predicted: np.ndarray, tangent: np.ndarray,
+             tolerance: float, max_iterations: int = 8) -> np.ndarray | None:
+    """Newton on f(θ) = x within the hyperplane through `predicted` orthogonal to `tangent`."""
+    theta = predicted.copy()
+    for _ in range(max_iterations):
+        residual = x - robot.forward_kinematics(theta)
+        if np.linalg.norm(residual) < tolerance:
+            return theta
+        system = np.vstack([robot.jacobian(theta), tangent])
+        rhs = np.concatenate([residual, [0.0]])
+        try:
+            theta = theta + np.linalg.solve(system, rhs)
+        except np.linalg.LinAlgError:  # exactly singular: a crossing point was hit
+            return None
+    return theta if np.linalg.norm(x - robot.forward_kinematics(theta)) < tolerance else None
+
+
+def _within_limits(robot: Robot, theta: np.ndarray) -> bool:
+    limits = robot.limits
+    inside = (theta >= limits[:, 0]) & (theta <= limits[:, 1])
+    return bool(np.all(inside | robot.periodic))
+
+
+def _distance_to_branch(robot: Robot, theta: np.ndarray, branch: SelfMotionManifold) -> float:
+    gaps = configuration_difference(branch.points, theta, robot.periodic)
+    return float(np.min(np.linalg.norm(gaps, axis=1)))

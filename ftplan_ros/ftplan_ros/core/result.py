@@ -1,0 +1,78 @@
+"""The planner's answer, as a frozen dataclass that serialises to the contract's JSON."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .angles import wrap_configuration
+from .failure_surface import FailureSurface
+from .manifolds import SelfMotionManifold
+
+
+@dataclass(frozen=True, eq=False)
+class PlanResult:
+    """A failure-tolerant plan, or why there is none.
+
+    `feasible` is a guarantee, checked by `verification.verify_surface`: from every point
+    of the nominal path, with any one joint locked there, a collision-free path in that
+    joint's failure hyperplane reaches the goal within its tolerance. Angles are radians;
+    `theta_s` and the hits are wrapped to (-π, π] on periodic joints, while the paths
+    are continuous (they may leave (-π, π] so as not to jump).
+    """
+
+    feasible: bool
+    joint_names: tuple[str, ...]
+    reason: str = ''
+    surface: FailureSurface | None = None
+    stats: dict = field(default_factory=dict)
+    # What the planner saw, for figures and diagnostics:
+    start_manifolds: tuple[SelfMotionManifold, ...] = ()
+    goal_manifolds: tuple[SelfMotionManifold, ...] = ()
+    theta_S: np.ndarray | None = None  # Θ_s: (c, n) candidates passing eq. 6 (paper Step 3)
+    proposed_starts: np.ndarray | None = None  # (p, n) of Θ_s with a vertex-free coarse S_F
+    periodic: np.ndarray | None = None
+
+    @property
+    def theta_s(self) -> np.ndarray | None:
+        """The chosen start configuration θ_s (n,) [rad]."""
+        return None if self.surface is None else self.surface.theta_s
+
+    @property
+    def nominal_path(self) -> np.ndarray | None:
+        """The nominal joint path (k, n) [rad] from θ_s to a goal configuration on S_F."""
+        return None if self.surface is None else self.surface.nominal_path
+
+    @property
+    def failure_plane_hits(self) -> np.ndarray | None:
+        """(n, n) [rad]: row i is the goal configuration in H_i(θ_s) ∩ M_g^F, wrapped."""
+        if self.surface is None:
+            return None
+        hits = self.surface.goal_points[list(self.surface.hit_paths)]
+        return wrap_configuration(hits, self.periodic)
+
+    @property
+    def hypercube(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Failure hypercube V_sg (lower, upper) (n,) [rad], in the paths' lifted angles."""
+        if self.surface is None:
+            return None
+        points = np.vstack([self.surface.theta_s[None, :], self.surface.goal_points])
+        return points.min(axis=0), points.max(axis=0)
+
+    def to_json(self) -> dict:
+        """Return the plan result JSON of CONTRACT.md (radians)."""
+        out: dict = {'feasible': self.feasible, 'joint_names': list(self.joint_names)}
+        if self.surface is not None:
+            lower, upper = self.hypercube
+            out.update({
+                'theta_s': self.theta_s.tolist(),
+                'nominal_path': self.nominal_path.tolist(),
+                'failure_surface': self.surface.to_dict(),
+                'failure_plane_hits': self.failure_plane_hits.tolist(),
+                'hypercube': {'lower': lower.tolist(), 'upper': upper.tolist()},
+            })
+        out['stats'] = self.stats
+        if not self.feasible:
+            out['reason'] = self.reason
+        return out

@@ -1,0 +1,212 @@
+"""The self-check: a plan is only called failure-tolerant after its guarantee is proved.
+
+`feasible: true` claims that from every point of the nominal path, with any one joint
+locked there, a collision-free path in that joint's failure hyperplane reaches x_g. The
+proof has three parts, each checked here rather than trusted:
+
+1. Every triangle of S_F is collision-free, over the continuum: a triangle is certified
+   when the clearance of each link at its centroid exceeds how far that link can move
+   inside it (Σ_a R[j, a] · max |θ_a - centroid_a|, `Robot.link_lever_arms`); otherwise
+   it is split in four, down to a depth limit.
+2. Every point of the goal row (the goal points and the chords between them) is within the
+   goal tolerance of x_g: sampled errors plus a second-order bound between samples.
+3. A recovery path exists for every lock: the nominal path is monotonic in every joint,
+   the bottom row is exactly θ_s and the path to θ_{H_i} keeps θ_i = θ_s,i exactly (the
+   argument in `recovery.py`); and, as a check of the implementation, `recover` is run
+   at sampled moments of the nominal path for every joint and each path it returns is
+   certified collision-free and arriving, like part 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .collision import CollisionChecker
+from .failure_surface import FailureSurface
+from .recovery import recover
+from .robot import Robot
+
+# Certified clearance must beat the motion bound by this much [m]: absorbs rounding.
+_ROUNDING = 1e-9
+
+
+@dataclass(frozen=True)
+class VerificationOptions:
+    """How hard the self-check works."""
+
+    margin: float = 0.0           # clearance [m] every certified configuration must exceed
+    max_depth: int = 7            # splits of a simplex before giving up on certifying it
+    chord_samples: int = 8        # samples per goal-row chord for the goal-error bound
+    recovery_moments: int = 11    # sampled moments of the nominal path for explicit recovery
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Outcome of the self-check; `reason` says what failed when `ok` is False."""
+
+    ok: bool
+    reason: str = ''
+    min_clearance: float = float('nan')       # [m] smallest clearance sampled on S_F
+    recovery_min_clearance: float = float('nan')  # [m] smallest on the sampled recoveries
+    max_goal_error: float = float('nan')     # [m] bound on the goal row's distance to x_g
+    clearance_samples: int = 0
+
+
+def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: float,
+                      max_depth: int) -> tuple[bool, int, float, int]:
+    """Certify that every point of each simplex is collision-free.
+
+    `corners` (S, c, n) [rad] are segments (c = 2) or triangles (c = 3) in joint space.
+    Returns (ok, index of the first simplex that failed or -1, smallest clearance sampled
+    [m], number of clearance samples).
+    """
+    arms = checker.robot.link_lever_arms()
+    roots = np.arange(len(corners))
+    smallest = np.inf
+    samples = 0
+    for _ in range(max_depth + 1):
+        if len(corners) == 0:
+            return True, -1, float(smallest), samples
+        centroids = corners.mean(axis=1)
+        clearance = checker.clearance(centroids)  # (S, L)
+        samples += len(centroids)
+        smallest = min(smallest, float(clearance.min()))
+        hit = np.flatnonzero(np.any(clearance <= margin, axis=1))
+        if len(hit):
+            return False, int(roots[hit[0]]), float(smallest), samples
+        spread = np.max(np.abs(corners - centroids[:, None, :]), axis=1)  # (S, n)
+        motion = spread @ arms.T  # (S, L): how far each link can move inside the simplex
+        open_ = np.flatnonzero(np.any(clearance - margin <= motion + _ROUNDING, axis=1))
+        corners, roots = _split(corners[open_]), np.repeat(roots[open_], _pieces(corners))
+    if len(corners) == 0:
+        return True, -1, float(smallest), samples
+    return False, int(roots[0]), float(smallest), samples
+
+
+def goal_row_error(robot: Robot, x_goal: np.ndarray, goal_points: np.ndarray,
+                   samples: int) -> float:
+    """Bound [m] on |f(θ) - x_g| over the chords joining consecutive goal points (K, n).
+
+    The error is evaluated at `samples` + 1 points per chord; between two samples of a
+    chord with step δ (n,), f leaves its linear interpolation by at most
+    (1/8) Σ_{a,b} R_tip[max(a, b)] |δ_a| |δ_b| (`Robot.tip_lever_arms`).
+    """
+    if len(goal_points) < 2:
+        return float(np.linalg.norm(robot.forward_kinematics(goal_points) - x_goal, axis=-1).max())
+    t = np.linspace(0.0, 1.0, samples + 1)
+    a, b = goal_points[:-1], goal_points[1:]
+    chords = a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]
+    errors = np.linalg.norm(robot.forward_kinematics(chords) - x_goal, axis=-1)
+    step = np.abs(b - a) / samples  # (K-1, n)
+    tip = robot.tip_lever_arms()
+    pair_arm = tip[np.maximum.outer(np.arange(len(tip)), np.arange(len(tip)))]
+    curvature = np.einsum('ka,ab,kb->k', step, pair_arm, step) / 8.0
+    return float(np.max(errors.max(axis=1) + curvature))
+
+
+def structure_problem(surface: FailureSurface) -> str:
+    """Why the web cannot carry the recovery argument, or '' when it can."""
+    paths = surface.paths
+    theta_s = surface.theta_s
+    if not np.all(paths[:, 0] == theta_s):
+        return 'the web paths do not all start at θ_s'
+    steps = np.diff(surface.nominal_path, axis=0)
+    if not np.all(np.all(steps >= 0, axis=0) | np.all(steps <= 0, axis=0)):
+        return 'the nominal path is not monotonic in every joint'
+    for i, k in enumerate(surface.hit_paths):
+        if not np.all(paths[k, :, i] == theta_s[i]):
+            return f'the path to the H_{i + 1} hit leaves the failure plane'
+    return ''
+
+
+def certify_surface(surface: FailureSurface, checker: CollisionChecker, x_goal: np.ndarray,
+                    goal_tolerance: float, options: VerificationOptions | None = None,
+                    ) -> Verdict:
+    """Parts 1, 2 and the structure of part 3 (see the module docstring) for x_g (m,) [m]."""
+    options = options or VerificationOptions()
+    problem = structure_problem(surface)
+    if problem:
+        return Verdict(False, problem)
+    error = goal_row_error(checker.robot, x_goal, surface.goal_points, options.chord_samples)
+    if error > goal_tolerance:
+        return Verdict(False, f'the goal row strays {error:.4f} m from x_g '
+                       f'(tolerance {goal_tolerance} m)', max_goal_error=error)
+    corners = surface.vertices[surface.triangles]
+    ok, failed, smallest, samples = certify_simplices(checker, corners, options.margin,
+                                                      options.max_depth)
+    if not ok:
+        path, waypoint = np.unravel_index(surface.triangles[failed, 0], surface.paths.shape[:2])
+        return Verdict(False, f'S_F is not collision-free near path {path}, waypoint '
+                       f'{waypoint}', min_clearance=smallest, max_goal_error=error,
+                       clearance_samples=samples)
+    return Verdict(True, '', smallest, max_goal_error=error, clearance_samples=samples)
+
+
+def check_recoveries(surface: FailureSurface, checker: CollisionChecker, x_goal: np.ndarray,
+                     goal_tolerance: float, certified: Verdict,
+                     options: VerificationOptions | None = None) -> Verdict:
+    """Part 3's check of the implementation: `recover` at sampled moments, for every joint.
+
+    Each recovery path must exist, be certified collision-free segment by segment and
+    end within the goal tolerance. `certified` is the surface's verdict from
+    `certify_surface`; the returned verdict extends it.
+    """
+    options = options or VerificationOptions()
+    samples = certified.clearance_samples
+    recovery_clearance = np.inf
+    nominal = surface.nominal_path
+    n_steps = len(nominal) - 1
+    for progress in np.linspace(0.0, 1.0, options.recovery_moments):
+        theta = _point_at(nominal, progress * n_steps)
+        for joint in range(len(theta)):
+            rescue = recover(surface, theta, joint)
+            where = f'check failed at joint {joint + 1}, progress {progress:.2f}'
+            if rescue is None:
+                return replace(certified, ok=False, reason=f'{where}: no recovery path')
+            arrival = np.linalg.norm(checker.robot.forward_kinematics(rescue.path[-1]) - x_goal)
+            segments = np.stack([rescue.path[:-1], rescue.path[1:]], axis=1)
+            clear, _, lowest, count = certify_simplices(checker, segments, options.margin,
+                                                        options.max_depth)
+            samples += count
+            if not clear or arrival > goal_tolerance:
+                why = 'collides' if not clear else f'ends {arrival:.4f} m from x_g'
+                return replace(certified, ok=False, clearance_samples=samples,
+                               reason=f'{where}: the recovery path {why}')
+            recovery_clearance = min(recovery_clearance, lowest)
+    return replace(certified, recovery_min_clearance=float(recovery_clearance),
+                   clearance_samples=samples)
+
+
+def verify_surface(surface: FailureSurface, checker: CollisionChecker, x_goal: np.ndarray,
+                   goal_tolerance: float, options: VerificationOptions | None = None,
+                   ) -> Verdict:
+    """Run the whole self-check of S_F for x_g (m,) [m]: certification, then recoveries."""
+    certified = certify_surface(surface, checker, x_goal, goal_tolerance, options)
+    if not certified.ok:
+        return certified
+    return check_recoveries(surface, checker, x_goal, goal_tolerance, certified, options)
+
+
+def _point_at(path: np.ndarray, position: float) -> np.ndarray:
+    """Return the point of a polyline (k, n) at fractional waypoint index `position`."""
+    w = min(int(np.floor(position)), len(path) - 2)
+    t = position - w
+    return path[w] + t * (path[w + 1] - path[w])
+
+
+def _pieces(corners: np.ndarray) -> int:
+    return 2 if corners.shape[1] == 2 else 4
+
+
+def _split(corners: np.ndarray) -> np.ndarray:
+    """Halve segments (S, 2, n) or quarter triangles (S, 3, n) at their edge midpoints."""
+    if corners.shape[1] == 2:
+        a, b = corners[:, 0], corners[:, 1]
+        m = 0.5 * (a + b)
+        return np.stack([np.stack([a, m], 1), np.stack([m, b], 1)], 1).reshape(-1, 2, a.shape[-1])
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    ab, bc, ca = 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)
+    pieces = [np.stack(p, 1) for p in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
+    return np.stack(pieces, 1).reshape(-1, 3, a.shape[-1])

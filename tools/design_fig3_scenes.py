@@ -1,0 +1,109 @@
+"""Design the Fig. 3-like scenes in config/scenes/ the way the paper made its own (Sec. V).
+
+The paper's obstacle positions are not published, only the start configurations that
+survived them (Table I). This script adds disks of radius 0.2 m one at a time, at seeded
+random places, and keeps a disk only when the paper's θ_s is still a verified
+failure-tolerant start and fewer other starts survive ("obstacles were added until
+eventually, the robot was left with a single feasible start configuration").
+
+    .venv/bin/python tools/design_fig3_scenes.py [--seed 7] [--trials 400]
+
+It rewrites config/scenes/fig3a.yaml, fig3b.yaml and fig3c.yaml.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from ftplan_ros.core.angles import wrap_angle
+from ftplan_ros.core.manifolds import ManifoldCache
+from ftplan_ros.core.planner import plan
+from ftplan_ros.core.scene import Obstacle, Scene, parse_scene, scene_to_dict
+
+SCENES = Path(__file__).resolve().parents[1] / 'config' / 'scenes'
+
+# Table I of the paper [deg], with its start positions [m].
+PAPER = {
+    'fig3a': ([2.0, 0.0], [-73.3, 114.0, -23.0], 'squeezed through random disks'),
+    'fig3b': ([2.0, 0.0], [66.7, -119.1, 45.1], 'a walled, pipe-like arrangement'),
+    'fig3c': ([2.5, 0.0], [23.5, -73.0, 70.9], 'random disks, start farther out'),
+}
+RADIUS = 0.2
+
+
+def survivors(scene: Scene, cache: ManifoldCache, theta_s: np.ndarray) -> np.ndarray:
+    """Proposed starts (p, n) [rad] other than those within 3 deg of the paper's θ_s."""
+    proposed = plan(scene, cache=cache).proposed_starts
+    far = np.max(np.abs(wrap_angle(proposed - theta_s)), axis=1) > np.radians(3.0)
+    return proposed[far]
+
+
+def design(name: str, rng: np.random.Generator, trials: int, target: int) -> Scene:
+    """Add disks while the paper's θ_s stays feasible and the other starts die out.
+
+    Each disk is dropped on the arm, somewhere on a surviving start or on a straight
+    joint-space path from it towards a random goal configuration, where it is likely to
+    kill that start's failure surfaces.
+    """
+    start, theta_deg, _ = PAPER[name]
+    theta_s = np.radians(theta_deg)
+    scene = parse_scene({'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]},
+                         'task': {'start': start, 'goal': [1.0, 0.0],
+                                  'goal_tolerance': 0.01}}, name=name)
+    robot = scene.robot
+    cache = ManifoldCache()
+    goals = np.vstack([b.points for b in cache.trace(robot, np.array([1.0, 0.0]), rng)])
+    others = survivors(scene, cache, theta_s)
+    for trial in range(trials):
+        if len(others) <= target:
+            break
+        theta = others[rng.integers(len(others))]
+        if rng.uniform() < 0.5:
+            theta = theta + rng.uniform() * (goals[rng.integers(len(goals))] - theta)
+        points = robot.joint_positions(theta)
+        link = rng.integers(robot.n_joints)
+        point = points[link] + rng.uniform() * (points[link + 1] - points[link])
+        center = (round(float(point[0]), 3), round(float(point[1]), 3), 0.0)
+        if np.hypot(*center[:2]) < 0.5 or any(
+                np.hypot(center[0] - ob.center[0], center[1] - ob.center[1]) < 2.0 * RADIUS
+                for ob in scene.obstacles):
+            continue
+        trial_scene = scene.with_obstacles([Obstacle('sphere', center, radius=RADIUS)])
+        if not plan(trial_scene, cache=cache, start_configuration=theta_s).feasible:
+            continue
+        remaining = survivors(trial_scene, cache, theta_s)
+        if len(remaining) < len(others):
+            scene, others = trial_scene, remaining
+            print(f'{name}: trial {trial}: disk at {center[:2]} leaves {len(others)} other '
+                  'starts', flush=True)
+    return scene
+
+
+def main() -> None:
+    """Design the three scenes and write them as YAML."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--seed', type=int, default=7)
+    parser.add_argument('--trials', type=int, default=1500)
+    parser.add_argument('--target', type=int, default=0,
+                        help='stop when this few other starts survive')
+    args = parser.parse_args()
+    rng = np.random.default_rng(args.seed)
+    for name, (_, theta_deg, story) in PAPER.items():
+        scene = design(name, rng, args.trials, args.target)
+        header = (f'# Fig. 3({name[-1]})-like scene: {story}. Disks of radius {RADIUS} m were\n'
+                  f'# added by tools/design_fig3_scenes.py --seed {args.seed} while the '
+                  f'paper\'s theta_s\n# {theta_deg} deg stayed a verified failure-tolerant '
+                  'start and fewer others survived.\n')
+        data = scene_to_dict(scene)
+        data['robot'] = '../robots/planar3r.yaml'
+        text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
+        (SCENES / f'{name}.yaml').write_text(header + text)
+        print(f'wrote {name}.yaml with {len(scene.obstacles)} disks')
+
+
+if __name__ == '__main__':
+    main()
