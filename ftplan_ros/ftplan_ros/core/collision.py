@@ -60,14 +60,22 @@ class CollisionChecker:
         return self.clearance(thetas).min(axis=1)
 
     def _sphere_clearance(self, thetas: np.ndarray) -> np.ndarray:
+        # Distance from centre c to segment a + t d, t in [0, 1], expanded into dot
+        # products so no (N, L, P, 3) temporaries are built: |c - a - t d|^2 =
+        # |c - a|^2 - 2 t (c - a)·d + t^2 |d|^2. Rounding is far below _ROUNDING in
+        # verification.py.
         segments = self.robot.link_segments(thetas)  # (N, L, 2, 3)
-        start = segments[:, :, None, 0, :]
-        direction = segments[:, :, None, 1, :] - start
-        offset = self._centers[None, None, :, :] - start  # (N, L, P, 3)
-        length2 = np.maximum(np.sum(direction ** 2, axis=-1), 1e-300)
-        t = np.clip(np.sum(offset * direction, axis=-1) / length2, 0.0, 1.0)
-        gap = offset - t[..., None] * direction
-        distance = np.sqrt(np.sum(gap ** 2, axis=-1)) - self._radii - self.robot.link_radius
+        start = segments[:, :, 0, :]
+        direction = segments[:, :, 1, :] - start
+        length2 = np.maximum(np.einsum('nlk,nlk->nl', direction, direction), 1e-300)
+        along = (np.einsum('nlk,pk->nlp', direction, self._centers)
+                 - np.einsum('nlk,nlk->nl', start, direction)[..., None])
+        offset2 = (np.einsum('pk,pk->p', self._centers, self._centers)
+                   - 2.0 * np.einsum('nlk,pk->nlp', start, self._centers)
+                   + np.einsum('nlk,nlk->nl', start, start)[..., None])
+        t = np.clip(along / length2[..., None], 0.0, 1.0)
+        gap2 = np.maximum(offset2 - 2.0 * t * along + t * t * length2[..., None], 0.0)
+        distance = np.sqrt(gap2) - self._radii - self.robot.link_radius
         return distance.min(axis=-1)
 
 

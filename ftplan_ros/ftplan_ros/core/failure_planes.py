@@ -73,33 +73,49 @@ def necessary_condition(robot: Robot, candidates: np.ndarray, arc_points: np.nda
                      for i in range(robot.n_joints)], axis=1)
 
 
-def failure_plane_hits(robot: Robot, x_goal: np.ndarray, theta_s: np.ndarray,
-                       arc_points: np.ndarray, refine: bool = True, tolerance: float = 1e-10,
-                       ) -> list[list[FailurePlaneHit]]:
-    """Step 3 for one θ_s: for each joint i, the points of H_i(θ_s) on the arc (a, n).
+def chord_crossings(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray, joint: int,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where H_joint(θ_s) of many θ_s (C, n) crosses the arc's chords, all at once.
 
-    Each crossing segment of the arc gives the point of its chord with θ_i = θ_s,i; with
-    `refine` that point is moved onto M_g exactly by Newton in H_i, and a refinement that
-    leaves the segment's neighbourhood is dropped.
+    Returns, per crossing, the candidate index (H,), its position along the arc (H,) in
+    units of arc points, and the chord point (H, n) [rad] with θ_joint = θ_s,joint exactly
+    (lifted like the arc).
     """
-    periodic = robot.periodic
+    periodic = bool(robot.periodic[joint])
+    values = arc_points[:, joint]
+    change = crossing_segments(values, candidates[:, joint], periodic)
+    which, segment = np.nonzero(change)
+    before = values[segment] - candidates[which, joint]
+    if periodic:
+        before = wrap_angle(before)
+    rise = values[segment + 1] - values[segment]
+    fraction = np.clip(np.divide(-before, rise, out=np.zeros_like(rise), where=rise != 0.0),
+                       0.0, 1.0)
+    a, b = arc_points[segment], arc_points[segment + 1]
+    points = a + fraction[:, None] * (b - a)
+    points[:, joint] = values[segment] - before
+    return which, segment + fraction, points
+
+
+def failure_plane_hits(robot: Robot, x_goal: np.ndarray, theta_s: np.ndarray,
+                       arc_points: np.ndarray, tolerance: float = 1e-10,
+                       ) -> list[list[FailurePlaneHit]]:
+    """Step 3 for one θ_s: for each joint i, the exact points of H_i(θ_s) ∩ M_g on the arc.
+
+    Each chord crossing (`chord_crossings`) is moved onto M_g by Newton in H_i; a
+    refinement that leaves the chord's neighbourhood is dropped.
+    """
     hits: list[list[FailurePlaneHit]] = []
     for i in range(robot.n_joints):
         found = []
-        level = np.array([theta_s[i]])
-        for k in np.flatnonzero(crossing_segments(arc_points[:, i], level, periodic[i])[0]):
-            a, b = arc_points[k], arc_points[k + 1]
-            da = wrap_angle(a[i] - theta_s[i]) if periodic[i] else a[i] - theta_s[i]
-            db = da + (b[i] - a[i])
-            fraction = da / (da - db) if da != db else 0.0
-            guess = a + fraction * (b - a)
-            guess[i] = a[i] - da  # exactly θ_s,i, lifted like the arc
-            theta = guess
-            if refine:
-                theta = project_to_preimage(robot, x_goal, guess, tolerance, fixed_joint=i)
-                if theta is None or np.linalg.norm(theta - guess) > np.linalg.norm(b - a):
-                    continue
-            found.append(FailurePlaneHit(i, theta, k + float(np.clip(fraction, 0.0, 1.0))))
+        _, positions, guesses = chord_crossings(robot, theta_s[None, :], arc_points, i)
+        for position, guess in zip(positions, guesses, strict=True):
+            k = min(int(position), len(arc_points) - 2)
+            theta = project_to_preimage(robot, x_goal, guess, tolerance, fixed_joint=i)
+            if theta is None or (np.linalg.norm(theta - guess)
+                                 > np.linalg.norm(arc_points[k + 1] - arc_points[k])):
+                continue
+            found.append(FailurePlaneHit(i, theta, float(position)))
         hits.append(found)
     return hits
 

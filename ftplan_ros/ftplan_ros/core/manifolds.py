@@ -103,10 +103,10 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
         raise ValueError('self-motion curves need exactly one degree of redundancy')
     limits = robot.limits
     seeds = rng.uniform(limits[:, 0], limits[:, 1], size=(options.seeds, robot.n_joints))
+    solved, converged = project_many(robot, x, seeds, options.tolerance)
     branches: list[SelfMotionManifold] = []
-    for seed in seeds:
-        theta = project_to_preimage(robot, x, seed, options.tolerance)
-        if theta is None or not _within_limits(robot, theta):
+    for theta, ok in zip(solved, converged, strict=True):
+        if not ok or not _within_limits(robot, theta):
             continue
         theta = wrap_configuration(theta, robot.periodic)
         if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
@@ -145,6 +145,32 @@ class ManifoldCache:
         return branches
 
 
+def self_motion_path(robot: Robot, x: np.ndarray, theta_from: np.ndarray,
+                     theta_to: np.ndarray, options: ManifoldOptions | None = None,
+                     ) -> np.ndarray | None:
+    """Find a path (k, n) [rad] along the self-motion manifold of x from θ_from to θ_to.
+
+    Both configurations must put the end effector at x (m,) [m]. Continuation runs both
+    ways from θ_from until it passes within a step of θ_to (on the torus of periodic
+    joints); the shorter way wins, and its last point is θ_to lifted next to it. Returns
+    None when θ_to lies on another branch or beyond a joint limit.
+    """
+    options = options or ManifoldOptions()
+    x = np.asarray(x, dtype=float)
+    periodic = robot.periodic
+    best = None
+    for direction in (+1.0, -1.0):
+        points, _, _ = _continue(robot, x, np.asarray(theta_from, dtype=float), direction,
+                                 options, target=np.asarray(theta_to, dtype=float))
+        gap = configuration_difference(theta_to, points[-1], periodic)
+        if np.linalg.norm(gap) > options.step_max:
+            continue
+        path = np.vstack(points + [points[-1] + gap])
+        if best is None or len(path) < len(best):
+            best = path
+    return best
+
+
 def mark_obstacle_free(manifold: SelfMotionManifold, checker: CollisionChecker,
                        ) -> SelfMotionManifold:
     """Step 2: return the branch with the clearance [m] of each of its points."""
@@ -159,22 +185,37 @@ def project_to_preimage(robot: Robot, x: np.ndarray, theta: np.ndarray,
     With `fixed_joint` = i the step leaves θ_i alone, so the result lies in the failure
     hyperplane H_i through θ. Returns None when it does not converge.
     """
-    theta = np.array(theta, dtype=float)
+    solved, converged = project_many(robot, x, np.asarray(theta, dtype=float)[None, :],
+                                     tolerance, max_iterations, fixed_joint)
+    return solved[0] if converged[0] else None
+
+
+def project_many(robot: Robot, x: np.ndarray, thetas: np.ndarray, tolerance: float = 1e-10,
+                 max_iterations: int = 60, fixed_joint: int | None = None,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """`project_to_preimage` for many starts (S, n) at once: (configurations, converged (S,))."""
+    thetas = np.array(thetas, dtype=float)
     movable = np.ones(robot.n_joints, dtype=bool)
     if fixed_joint is not None:
         movable[fixed_joint] = False
+    eye = np.eye(len(x))
     for _ in range(max_iterations):
-        residual = x - robot.forward_kinematics(theta)
-        if np.linalg.norm(residual) < tolerance:
-            return theta
-        jac = robot.jacobian(theta)[:, movable]
-        damping = 1e-6 if np.linalg.norm(residual) < 1e-3 else 1e-3
-        step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(len(x)), residual)
-        norm = np.linalg.norm(step)
-        if norm > 0.5:  # keep Newton local: long steps jump between branches
-            step *= 0.5 / norm
-        theta[movable] += step
-    return None
+        residual = x - robot.forward_kinematics(thetas)  # (S, m)
+        error = np.linalg.norm(residual, axis=1)
+        active = error >= tolerance
+        if not active.any():
+            break
+        jac = robot.jacobian(thetas[active])[:, :, movable]  # (A, m, k)
+        damping = np.where(error[active] < 1e-3, 1e-6, 1e-3)[:, None, None]
+        gram = jac @ np.swapaxes(jac, 1, 2) + damping * eye
+        weights = np.linalg.solve(gram, residual[active][..., None])[..., 0]
+        step = np.einsum('amk,am->ak', jac, weights)
+        norm = np.linalg.norm(step, axis=1, keepdims=True)
+        step *= np.minimum(1.0, 0.5 / np.maximum(norm, 1e-300))  # keep Newton local
+        rows = np.flatnonzero(active)
+        thetas[np.ix_(rows, np.flatnonzero(movable))] += step
+    error = np.linalg.norm(x - robot.forward_kinematics(thetas), axis=1)
+    return thetas, error < tolerance
 
 
 def null_space_tangent(robot: Robot, theta: np.ndarray) -> np.ndarray:
@@ -193,8 +234,12 @@ def _trace_branch(robot: Robot, x: np.ndarray, seed: np.ndarray,
 
 
 def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
-              options: ManifoldOptions) -> tuple[list[np.ndarray], bool, np.ndarray]:
-    """Predictor-corrector from `seed` until the loop closes, a limit or a dead end."""
+              options: ManifoldOptions, target: np.ndarray | None = None,
+              ) -> tuple[list[np.ndarray], bool, np.ndarray]:
+    """Predictor-corrector from `seed` until the loop closes, a limit or a dead end.
+
+    With a `target`, it also stops as soon as a point comes within a step of it.
+    """
     periodic = robot.periodic
     tangent = direction * null_space_tangent(robot, seed)
     seed_tangent = tangent
@@ -202,14 +247,13 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
     theta = seed
     step = options.step_max
     travelled = 0.0
+    min_turn = np.cos(options.max_turn)
     while len(points) < options.max_points:
         corrected = _correct(robot, x, theta + step * tangent, tangent, options.tolerance)
-        new_tangent = None
         if corrected is not None:
-            new_tangent = null_space_tangent(robot, corrected)
-            new_tangent *= np.sign(new_tangent @ tangent) or 1.0
+            corrected, new_tangent = corrected
             moved = np.linalg.norm(corrected - theta)
-            if new_tangent @ tangent < np.cos(options.max_turn) or moved > 1.5 * step:
+            if new_tangent @ tangent < min_turn or moved > 1.5 * step:
                 corrected = None
         if corrected is None:
             step *= 0.5
@@ -219,12 +263,15 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
             continue
         if not _within_limits(robot, corrected):
             return points, False, np.zeros(robot.n_joints)
-        travelled += np.linalg.norm(corrected - theta)
+        travelled += moved
         theta, tangent = corrected, new_tangent
         points.append(theta)
+        if target is not None and np.linalg.norm(
+                configuration_difference(target, theta, periodic)) <= options.step_max:
+            return points, False, np.zeros(robot.n_joints)
         gap = configuration_difference(theta, seed, periodic)
         if (travelled > 3.0 * options.step_max and np.linalg.norm(gap) < options.step_max
-                and tangent @ seed_tangent > np.cos(options.max_turn)):
+                and tangent @ seed_tangent > min_turn):
             # Back at the seed: the closing chord to seed + period is shorter than a step.
             period = np.where(periodic, theta - gap - seed, 0.0)
             period = 2.0 * np.pi * np.round(period / (2.0 * np.pi))
@@ -234,20 +281,30 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
 
 
 def _correct(robot: Robot, x: np.ndarray, predicted: np.ndarray, tangent: np.ndarray,
-             tolerance: float, max_iterations: int = 8) -> np.ndarray | None:
-    """Newton on f(θ) = x within the hyperplane through `predicted` orthogonal to `tangent`."""
+             tolerance: float, max_iterations: int = 8,
+             ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Newton on f(θ) = x in the hyperplane through `predicted` orthogonal to `tangent`.
+
+    Returns the point and its unit self-motion direction (oriented like `tangent`): both
+    come from the same bordered matrix [J; tangent], whose solve against the last unit
+    vector is a null vector of J.
+    """
     theta = predicted.copy()
-    for _ in range(max_iterations):
-        residual = x - robot.forward_kinematics(theta)
-        if np.linalg.norm(residual) < tolerance:
-            return theta
-        system = np.vstack([robot.jacobian(theta), tangent])
-        rhs = np.concatenate([residual, [0.0]])
+    rhs = np.zeros((len(theta), 2))
+    rhs[-1, 1] = 1.0
+    for _ in range(max_iterations + 1):
+        position, jac = robot.kinematics(theta)
+        residual = x - position
+        rhs[:-1, 0] = residual
         try:
-            theta = theta + np.linalg.solve(system, rhs)
+            solution = np.linalg.solve(np.vstack([jac, tangent]), rhs)
         except np.linalg.LinAlgError:  # exactly singular: a crossing point was hit
             return None
-    return theta if np.linalg.norm(x - robot.forward_kinematics(theta)) < tolerance else None
+        if residual @ residual < tolerance * tolerance:
+            direction = solution[:, 1]
+            return theta, direction / np.linalg.norm(direction)
+        theta = theta + solution[:, 0]
+    return None
 
 
 def _within_limits(robot: Robot, theta: np.ndarray) -> bool:

@@ -2,10 +2,10 @@
 
 Candidates θ_s are the obstacle-free points of M_s (thinned). Those passing the necessary
 condition (eq. 6) on one free arc of M_g get a failure surface over the smallest windows
-of that arc holding a hit of every joint. Surfaces are ranked by the smallest clearance
-at their vertices and verified in that order; among the first few that pass, the one
-whose certified S_F keeps the largest minimum clearance wins. That criterion, recorded
-in the result's stats, prefers starts whose whole recovery region stays far from
+of that arc holding a hit of every joint. Every such surface is built coarsely and
+scored by the smallest clearance at its vertices; the best-scored is built at full
+resolution and verified, then the next, until one passes. That criterion (recorded in
+the result's stats) prefers the start whose whole recovery region stays farthest from
 obstacles over the first start found.
 """
 
@@ -22,6 +22,8 @@ from .angles import wrap_configuration
 from .collision import CollisionChecker, point_clearance
 from .errors import InputError
 from .failure_planes import (
+    FailurePlaneHit,
+    chord_crossings,
     failure_plane_hits,
     goal_free_arcs,
     necessary_condition,
@@ -42,11 +44,11 @@ from .manifolds import (
 )
 from .result import PlanResult
 from .scene import Scene
-from .verification import Verdict, VerificationOptions, certify_surface, check_recoveries
+from .verification import VerificationOptions, verify_surface
 
 log = logging.getLogger(__name__)
 
-CRITERION = 'largest minimum clearance over the certified failure surface'
+CRITERION = 'largest minimum clearance at the vertices of the failure surface'
 
 
 @dataclass(frozen=True)
@@ -58,9 +60,8 @@ class PlannerOptions:
     candidate_spacing: float = 0.02   # between θ_s candidates along M_s^F
     column_spacing: float = 0.06      # between the goal points of a web
     waypoint_spacing: float = 0.04    # between the waypoints of a web path, per joint
-    coarse_spacing: float = 0.25      # column and waypoint spacing of the ranking webs
+    coarse_waypoints: int = 8         # waypoints of each path of the ranking fans
     windows_per_candidate: int = 2    # hit windows tried for each θ_s and arc
-    surfaces_to_compare: int = 3      # verified surfaces compared before choosing
     max_verifications: int = 40       # surfaces verified at most
 
 
@@ -165,49 +166,34 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
     # Steps 4-6: failure surfaces, ranked by the clearance at their vertices.
     report(f'{len(theta_S)} start configurations pass the necessary condition; '
            'building failure surfaces')
-    proposals = _rank_proposals(robot, x_g, candidates, arc_points, single_arc, checker,
-                                options)
+    proposals = _rank_proposals(robot, candidates, arc_points, single_arc, checker, options)
     stats['surfaces_proposed'] = len(proposals)
     if not proposals:
         return finish(None, 'no failure surface: every surface proposed hits an obstacle '
                       'at one of its vertices')
 
-    # Self-check, best-ranked first: certify a few surfaces, then the clearest one must
-    # also pass the explicit recovery checks (or the next clearest is taken).
-    certified: list[tuple[FailureSurface, Verdict]] = []
+    # Self-check, best-ranked first: the first surface that passes wins.
     last_reason = 'every fine web hits an obstacle at a vertex'
     tried = 0
-    for proposal in proposals:
-        if tried >= options.max_verifications or len(certified) >= options.surfaces_to_compare:
-            break
+    for proposal in proposals[:options.max_verifications]:
         surface = _fine_surface(robot, x_g, candidates[proposal.candidate],
                                 arc_points[proposal.arc], proposal.window, checker, options)
         if surface is None:
             continue
         tried += 1
-        verdict = certify_surface(surface, checker, x_g, task.goal_tolerance,
-                                  options.verification)
+        verdict = verify_surface(surface, checker, x_g, task.goal_tolerance,
+                                 options.verification)
         if verdict.ok:
-            certified.append((surface, verdict))
-            report(f'certified failure surface {len(certified)} '
-                   f'(clearance {verdict.min_clearance:.3f} m)')
-        else:
-            last_reason = verdict.reason
-            log.debug('surface rejected: %s', verdict.reason)
-    stats['surfaces_certified'] = len(certified)
-    stats['surfaces_tried'] = tried
-    for surface, verdict in sorted(certified, key=lambda item: -item[1].min_clearance):
-        verdict = check_recoveries(surface, checker, x_g, task.goal_tolerance, verdict,
-                                   options.verification)
-        if verdict.ok:
-            return finish(surface, min_clearance_m=verdict.min_clearance,
+            report(f'verified the failure surface of start {tried} in the ranking')
+            return finish(surface, surfaces_tried=tried, criterion_value_m=proposal.score,
+                          min_clearance_m=verdict.min_clearance,
                           recovery_min_clearance_m=verdict.recovery_min_clearance,
                           goal_error_bound_m=verdict.max_goal_error,
                           clearance_samples=verdict.clearance_samples)
         last_reason = verdict.reason
-        log.error('a certified surface failed its recovery check: %s', verdict.reason)
+        log.debug('surface rejected: %s', verdict.reason)
     return finish(None, f'check failed for all {tried} failure surfaces tried; the last: '
-                  f'{last_reason}')
+                  f'{last_reason}', surfaces_tried=tried)
 
 
 def _given_start(robot, x_s: np.ndarray, theta: np.ndarray, checker: CollisionChecker,
@@ -251,33 +237,49 @@ class _Proposal:
     window: tuple[float, float]
 
 
-def _rank_proposals(robot, x_g: np.ndarray, candidates: np.ndarray, arc_points: list[np.ndarray],
+def _rank_proposals(robot, candidates: np.ndarray, arc_points: list[np.ndarray],
                     single_arc: np.ndarray, checker: CollisionChecker, options: PlannerOptions,
                     ) -> list[_Proposal]:
-    """Coarse webs for each (θ_s, arc) passing eq. 6, scored in one batch; best first.
+    """Score a coarse failure surface for each (θ_s, arc) passing eq. 6; best first.
 
-    The coarse web uses the chord points of the failure-plane crossings (no Newton) and
-    a few columns and waypoints: a cheap screen, never a guarantee.
+    A coarse surface is the fan of straight paths from θ_s to its chord crossings (one per
+    joint) and to a few points spread over the window, all scored in one clearance batch:
+    a cheap screen, never a guarantee.
     """
-    proposals, webs = [], []
-    for a, c in zip(*np.nonzero(single_arc), strict=True):
-        theta_s = candidates[c]
-        hits = failure_plane_hits(robot, x_g, theta_s, arc_points[a], refine=False)
-        for window in smallest_windows(hits)[:options.windows_per_candidate]:
-            chosen = choose_hits(hits, window)
-            lifted, lifted_hits = lift_goal_arc(theta_s, arc_points[a], chosen, robot.periodic)
-            web = build_failure_surface(theta_s, lifted, lifted_hits, window,
-                                        options.coarse_spacing, options.coarse_spacing)
-            proposals.append((int(c), int(a), window))
-            webs.append(web.vertices)
-    if not webs:
+    n = robot.n_joints
+    proposals, fans = [], []
+    for a, points in enumerate(arc_points):
+        members = np.flatnonzero(single_arc[a])
+        hits: list[list[list[FailurePlaneHit]]] = [[[] for _ in range(n)] for _ in members]
+        for i in range(n):
+            which, positions, thetas = chord_crossings(robot, candidates[members], points, i)
+            for slot, position, theta in zip(which, positions, thetas, strict=True):
+                hits[slot][i].append(FailurePlaneHit(i, theta, float(position)))
+        for slot, c in enumerate(members):
+            for window in smallest_windows(hits[slot])[:options.windows_per_candidate]:
+                fans.append(_coarse_fan(candidates[c], points, choose_hits(hits[slot], window),
+                                        window, robot.periodic, options.coarse_waypoints))
+                proposals.append((int(c), a, window))
+    if not fans:
         return []
-    clearance = checker.min_clearance(np.vstack(webs))
-    bounds = np.cumsum([0] + [len(web) for web in webs])
-    scored = [_Proposal(float(clearance[lo:hi].min()), *proposal)
-              for proposal, lo, hi in zip(proposals, bounds[:-1], bounds[1:], strict=True)]
+    clearance = checker.min_clearance(np.vstack(fans)).reshape(len(fans), -1).min(axis=1)
     margin = options.verification.margin
-    return sorted((p for p in scored if p.score > margin), key=lambda p: -p.score)
+    scored = [_Proposal(float(score), *proposal)
+              for score, proposal in zip(clearance, proposals, strict=True) if score > margin]
+    return sorted(scored, key=lambda p: -p.score)
+
+
+def _coarse_fan(theta_s: np.ndarray, arc_points: np.ndarray, hits: list[FailurePlaneHit],
+                window: tuple[float, float], periodic: np.ndarray, waypoints: int) -> np.ndarray:
+    """Points (m, n) [rad] of straight paths from θ_s to its hits and across the window."""
+    lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, hits, periodic)
+    spread = np.linspace(window[0], window[1], 5)
+    k = np.minimum(spread.astype(int), len(arc_points) - 2)
+    t = (spread - k)[:, None]
+    goals = np.vstack([[h.theta for h in lifted_hits],
+                       lifted[k] + t * (lifted[k + 1] - lifted[k])])
+    steps = np.arange(1, waypoints + 1)[:, None, None] / waypoints
+    return (theta_s + steps * (goals - theta_s)).reshape(-1, len(theta_s))
 
 
 def _fine_surface(robot, x_g: np.ndarray, theta_s: np.ndarray, arc_points: np.ndarray,

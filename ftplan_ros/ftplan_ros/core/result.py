@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .angles import wrap_configuration
+from .failure_planes import failure_hypercube
 from .failure_surface import FailureSurface
 from .manifolds import SelfMotionManifold
 
@@ -57,8 +58,7 @@ class PlanResult:
         """Failure hypercube V_sg (lower, upper) (n,) [rad], in the paths' lifted angles."""
         if self.surface is None:
             return None
-        points = np.vstack([self.surface.theta_s[None, :], self.surface.goal_points])
-        return points.min(axis=0), points.max(axis=0)
+        return failure_hypercube(self.surface.theta_s, self.surface.goal_points)
 
     def to_json(self) -> dict:
         """Return the plan result JSON of CONTRACT.md (radians)."""

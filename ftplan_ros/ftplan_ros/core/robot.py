@@ -8,6 +8,7 @@ in radians; positions are in metres in the robot base frame.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Protocol
 
 import numpy as np
@@ -42,6 +43,9 @@ class Robot(Protocol):
 
     def jacobian(self, thetas: np.ndarray) -> np.ndarray:
         """Position Jacobian (..., m, n) [m/rad] of configurations (..., n) [rad]."""
+
+    def kinematics(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """End-effector position (m,) [m] and Jacobian (m, n) [m/rad] of one configuration."""
 
     def link_segments(self, thetas: np.ndarray) -> np.ndarray:
         """Core segments (..., L, 2, 3) [m] of the L link capsules, in the base frame."""
@@ -93,20 +97,22 @@ class PlanarChain:
         """The planar end-effector position has m = 2 components."""
         return 2
 
-    @property
+    @cached_property
     def periodic(self) -> np.ndarray:
         """(n,) bool: True for joints without limits."""
-        if self.joint_limits is None:
-            return np.ones(self.n_joints, dtype=bool)
-        return np.array([lim is None for lim in self.joint_limits], dtype=bool)
+        periodic = np.array([lim is None for lim in self.joint_limits or
+                             (None,) * self.n_joints], dtype=bool)
+        periodic.flags.writeable = False
+        return periodic
 
-    @property
+    @cached_property
     def limits(self) -> np.ndarray:
         """(n, 2) joint limits [rad]; (-π, π] for periodic joints."""
         out = np.tile([-np.pi, np.pi], (self.n_joints, 1))
         for j, lim in enumerate(self.joint_limits or ()):
             if lim is not None:
                 out[j] = lim
+        out.flags.writeable = False
         return out
 
     def _absolute_angles(self, thetas: np.ndarray) -> np.ndarray:
@@ -135,6 +141,16 @@ class PlanarChain:
         dx = -np.cumsum((lengths * np.sin(phi))[..., ::-1], axis=-1)[..., ::-1]
         dy = np.cumsum((lengths * np.cos(phi))[..., ::-1], axis=-1)[..., ::-1]
         return np.stack([dx, dy], axis=-2)
+
+    def kinematics(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """End-effector position (2,) [m] and Jacobian (2, n) [m/rad], sharing the trigonometry."""
+        phi = np.cumsum(theta)
+        lengths = np.asarray(self.link_lengths)
+        x, y = lengths * np.cos(phi), lengths * np.sin(phi)
+        jac = np.empty((2, len(phi)))
+        jac[0] = -np.cumsum(y[::-1])[::-1]
+        jac[1] = np.cumsum(x[::-1])[::-1]
+        return np.array([x.sum(), y.sum()]), jac
 
     def link_segments(self, thetas: np.ndarray) -> np.ndarray:
         """Core segments (..., n, 2, 3) [m] of the link capsules, at z = 0."""

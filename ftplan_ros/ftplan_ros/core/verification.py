@@ -25,11 +25,13 @@ import numpy as np
 
 from .collision import CollisionChecker
 from .failure_surface import FailureSurface
+from .paths import point_at_fraction
 from .recovery import recover
 from .robot import Robot
 
-# Certified clearance must beat the motion bound by this much [m]: absorbs rounding.
-_ROUNDING = 1e-9
+# Certified clearance must beat the motion bound by this much [m]: absorbs the rounding
+# of the clearance computation (about 1e-8 m near contact).
+_ROUNDING = 1e-6
 
 
 @dataclass(frozen=True)
@@ -39,7 +41,7 @@ class VerificationOptions:
     margin: float = 0.0           # clearance [m] every certified configuration must exceed
     max_depth: int = 7            # splits of a simplex before giving up on certifying it
     chord_samples: int = 8        # samples per goal-row chord for the goal-error bound
-    recovery_moments: int = 11    # sampled moments of the nominal path for explicit recovery
+    recovery_moments: int = 5     # sampled moments of the nominal path for explicit recovery
 
 
 @dataclass(frozen=True)
@@ -156,10 +158,8 @@ def check_recoveries(surface: FailureSurface, checker: CollisionChecker, x_goal:
     options = options or VerificationOptions()
     samples = certified.clearance_samples
     recovery_clearance = np.inf
-    nominal = surface.nominal_path
-    n_steps = len(nominal) - 1
     for progress in np.linspace(0.0, 1.0, options.recovery_moments):
-        theta = _point_at(nominal, progress * n_steps)
+        theta = point_at_fraction(surface.nominal_path, progress)
         for joint in range(len(theta)):
             rescue = recover(surface, theta, joint)
             where = f'check failed at joint {joint + 1}, progress {progress:.2f}'
@@ -187,13 +187,6 @@ def verify_surface(surface: FailureSurface, checker: CollisionChecker, x_goal: n
     if not certified.ok:
         return certified
     return check_recoveries(surface, checker, x_goal, goal_tolerance, certified, options)
-
-
-def _point_at(path: np.ndarray, position: float) -> np.ndarray:
-    """Return the point of a polyline (k, n) at fractional waypoint index `position`."""
-    w = min(int(np.floor(position)), len(path) - 2)
-    t = position - w
-    return path[w] + t * (path[w + 1] - path[w])
 
 
 def _pieces(corners: np.ndarray) -> int:

@@ -1,0 +1,198 @@
+"""The `ftplan` command: plan, drill, draw and benchmark failure-tolerant motions.
+
+    ftplan plan SCENE.yaml [--json OUT.json] [--png FIG.png]
+    ftplan drill SCENE.yaml --trials N --seed S [--png MOTION.png]
+    ftplan figure SCENE.yaml [--out DIR]
+    ftplan bench [--scenes N] [--seed S]
+
+Exit codes: 0 done (for `plan`: a failure-tolerant plan exists), 1 no failure-tolerant
+plan (or a drill trial failed), 2 bad input (one line on stderr naming the field).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .core import InputError, PlannerOptions, VerificationOptions, load_scene, plan
+from .core.drill import drilled_motion, run_drill, summarize_drill
+
+log = logging.getLogger('ftplan')
+
+
+class Progress:
+    """Progress lines on stderr for work that takes more than a second."""
+
+    def __init__(self, stream=sys.stderr):
+        self.stream = stream
+        self.started = time.perf_counter()
+        self.last = -1.0
+
+    def line(self, text: str) -> None:
+        """Print a stage of the work with the time elapsed."""
+        print(f'[{time.perf_counter() - self.started:6.2f} s] {text}', file=self.stream,
+              flush=True)
+
+    def count(self, done: int, total: int) -> None:
+        """Print `done/total` at most once a second, and at the end."""
+        now = time.perf_counter()
+        if done == total or now - self.last >= 1.0:
+            self.last = now
+            self.line(f'{done}/{total}')
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the `ftplan` command line; return the exit code."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format='%(levelname)s %(name)s: %(message)s')
+    try:
+        return args.run(args)
+    except InputError as error:
+        print(f'ftplan: error: {error}', file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f'ftplan: error: {error.filename or ""}: {error.strerror}', file=sys.stderr)
+        return 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog='ftplan', description=__doc__.splitlines()[0])
+    parser.add_argument('-v', '--verbose', action='store_true', help='log what the core does')
+    commands = parser.add_subparsers(required=True, metavar='COMMAND')
+
+    planning = commands.add_parser('plan', help='plan the scene\'s task')
+    planning.add_argument('scene', type=Path, help='scene YAML (robot, obstacles, task)')
+    planning.add_argument('--json', type=Path, help='write the plan result JSON here')
+    planning.add_argument('--png', type=Path, help='write a figure of the plan here')
+    _planner_arguments(planning)
+    planning.set_defaults(run=_plan_command)
+
+    drill = commands.add_parser('drill', help='Monte Carlo failure drill of the plan')
+    drill.add_argument('scene', type=Path)
+    drill.add_argument('--trials', type=int, default=1000, help='failures to try (1000)')
+    drill.add_argument('--png', type=Path, help='draw one drilled motion here')
+    _planner_arguments(drill)
+    drill.set_defaults(run=_drill_command)
+
+    figure = commands.add_parser('figure', help='draw the paper\'s Fig. 3 and Fig. 4 for a scene')
+    figure.add_argument('scene', type=Path)
+    figure.add_argument('--out', type=Path, default=Path('out'), help='folder (out/)')
+    _planner_arguments(figure)
+    figure.set_defaults(run=_figure_command)
+
+    bench = commands.add_parser('bench', help='time the planner against the exhaustive grid')
+    bench.add_argument('--scenes', type=int, default=30, help='random scenes (30)')
+    bench.add_argument('--seed', type=int, default=0)
+    bench.add_argument('--cells', type=int, default=90, help='grid cells per joint (90: 4 deg)')
+    bench.add_argument('--json', type=Path, help='write every measurement here')
+    bench.set_defaults(run=_bench_command)
+    return parser
+
+
+def _planner_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('--seed', type=int, default=0, help='seed of the random generators (0)')
+    parser.add_argument('--margin', type=float, default=0.0,
+                        help='clearance [m] the guarantee keeps from obstacles (0.0)')
+
+
+def _plan(args: argparse.Namespace, progress: Progress):
+    scene = load_scene(args.scene)
+    if not np.isfinite(args.margin) or args.margin < 0:
+        raise InputError('--margin', f'must be a finite clearance >= 0, got {args.margin}')
+    options = PlannerOptions(verification=VerificationOptions(margin=args.margin))
+    result = plan(scene, options, np.random.default_rng(args.seed), progress=progress.line)
+    return scene, result
+
+
+def _plan_command(args: argparse.Namespace) -> int:
+    progress = Progress()
+    scene, result = _plan(args, progress)
+    print(_describe(scene, result))
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result.to_json(), indent=1))
+        print(f'wrote {args.json}')
+    if args.png:
+        from .figures import plan_figure, save_figure
+        print(f'wrote {save_figure(plan_figure(scene, result), args.png)}')
+    return 0 if result.feasible else 1
+
+
+def _drill_command(args: argparse.Namespace) -> int:
+    if args.trials < 1:
+        raise InputError('--trials', f'must be at least 1, got {args.trials}')
+    progress = Progress()
+    scene, result = _plan(args, progress)
+    print(_describe(scene, result))
+    if not result.feasible:
+        return 1
+    progress.line(f'drilling {args.trials} locked-joint failures')
+    trials = run_drill(scene, result, args.trials, np.random.default_rng(args.seed),
+                       progress=progress.count)
+    print(summarize_drill(trials, scene.robot.joint_names))
+    failed = [t for t in trials if not t.ok]
+    print(f'{len(trials) - len(failed)}/{len(trials)} trials reached the goal without collision')
+    if args.png:
+        from .figures import motion_figure, save_figure
+        worst = min(trials, key=lambda t: t.min_clearance)
+        motion, lock_index, _ = drilled_motion(result, worst.joint, worst.progress)
+        title = (f'{scene.robot.joint_names[worst.joint]} locked at {worst.progress:.0%} of '
+                 f'the path (the drill\'s closest call, {worst.min_clearance:.3f} m)')
+        figure = motion_figure(scene, motion, lock_index, worst.joint, title)
+        print(f'wrote {save_figure(figure, args.png)}')
+    return 0 if not failed else 1
+
+
+def _figure_command(args: argparse.Namespace) -> int:
+    from .figures import joint_space_figure, save_figure, workspace_figure
+    progress = Progress()
+    scene, result = _plan(args, progress)
+    print(_describe(scene, result))
+    stem = args.scene.stem
+    progress.line('drawing')
+    for name, figure in ((f'{stem}_workspace.png', workspace_figure(scene, result)),
+                         (f'{stem}_joint_space.png', joint_space_figure(scene, result))):
+        print(f'wrote {save_figure(figure, args.out / name)}')
+    return 0
+
+
+def _bench_command(args: argparse.Namespace) -> int:
+    from .bench import run_benchmark
+    return run_benchmark(args.scenes, args.seed, args.cells, args.json, Progress())
+
+
+def _describe(scene, result) -> str:
+    """Describe the outcome in a few lines: θ_s and hits in degrees, time and checks."""
+    stats = result.stats
+    lines = [f'scene {scene.name}: task {list(scene.task.start)} -> {list(scene.task.goal)} m, '
+             f'{len(scene.obstacles)} obstacles']
+    if not result.feasible:
+        lines.append(f'no failure-tolerant plan: {result.reason}')
+    else:
+        degrees = np.degrees
+        lines.append(f'feasible: theta_s = {_deg(degrees(result.theta_s))} deg')
+        for i, hit in enumerate(result.failure_plane_hits):
+            lines.append(f'  H{i + 1} hit on M_g^F: {_deg(degrees(hit))} deg')
+        lines.append(f'  S_F: {result.surface.paths.shape[0]} paths x '
+                     f'{result.surface.paths.shape[1]} waypoints, minimum clearance '
+                     f'{stats["min_clearance_m"]:.3f} m ({stats["criterion"]})')
+    lines.append(f'plan time {stats["plan_time_s"]:.3f} s, {stats["collision_checks"]} '
+                 f'clearance queries, {stats.get("theta_S", 0)} of '
+                 f'{stats.get("start_candidates", 0)} obstacle-free starts pass eq. (6)')
+    return '\n'.join(lines)
+
+
+def _deg(values: np.ndarray) -> str:
+    return '[' + ', '.join(f'{v:.1f}' for v in values) + ']'
+
+
+if __name__ == '__main__':
+    sys.exit(main())

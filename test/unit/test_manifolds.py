@@ -1,0 +1,128 @@
+"""Steps 1-2: traced self-motion manifolds against exact inverse kinematics."""
+
+import numpy as np
+import pytest
+
+from ftplan_ros.core.angles import configuration_difference
+from ftplan_ros.core.collision import CollisionChecker
+from ftplan_ros.core.manifolds import (
+    ManifoldCache,
+    ManifoldOptions,
+    mark_obstacle_free,
+    project_to_preimage,
+    self_motion_path,
+    trace_self_motion_manifolds,
+)
+from ftplan_ros.core.robot import PlanarChain
+from ftplan_ros.core.scene import Obstacle
+
+ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
+
+
+def exact_ik(x, theta1):
+    """Every (θ2, θ3) of the 3R arm with θ1 fixed that reaches x: 2R inverse kinematics."""
+    elbow = np.array([np.cos(theta1), np.sin(theta1)])
+    d = x - elbow
+    r = np.linalg.norm(d)
+    if r > 2.0 or r < 1e-9:
+        return []
+    bend = np.arccos(np.clip(r * r / 2.0 - 1.0, -1.0, 1.0))  # links of 1 m
+    out = []
+    for sign in (1.0, -1.0):
+        a2 = np.arctan2(d[1], d[0]) - sign * np.arctan2(np.sin(bend), 1.0 + np.cos(bend))
+        out.append(np.array([theta1, a2 - theta1, sign * bend]))
+    return out
+
+
+def distance_to_branches(theta, branches):
+    return min(np.min(np.linalg.norm(configuration_difference(b.points, theta, ARM.periodic),
+                                     axis=1)) for b in branches)
+
+
+@pytest.mark.parametrize('x, loops', [([2.0, 0.0], 1), ([2.5, 0.0], 1), ([0.3, 1.9], 1)])
+def test_regular_positions_give_closed_loops_on_the_preimage(rng, x, loops):
+    x = np.array(x)
+    branches = trace_self_motion_manifolds(ARM, x, rng)
+    assert len(branches) == loops
+    for branch in branches:
+        assert branch.closed
+        assert np.abs(ARM.forward_kinematics(branch.points) - x).max() < 1e-9
+        closing = branch.points[0] + branch.period - branch.points[-1]
+        loop = np.vstack([branch.points, branch.points[:1] + branch.period])
+        steps = np.linalg.norm(np.diff(loop, axis=0), axis=1)
+        assert steps.max() <= ManifoldOptions().step_max * 1.5 + 1e-9
+        assert np.linalg.norm(closing) <= ManifoldOptions().step_max
+
+
+@pytest.mark.parametrize('x', [[2.0, 0.0], [2.5, 0.0], [1.0, 0.0], [0.3, 1.9]])
+def test_every_exact_ik_solution_lies_on_a_traced_branch(rng, x):
+    """Brute force: θ1 on a dense grid, exact 2R IK for the rest; nothing may be missed."""
+    x = np.array(x)
+    branches = trace_self_motion_manifolds(ARM, x, rng)
+    step = ManifoldOptions().step_max
+    for theta1 in np.linspace(-np.pi, np.pi, 721):
+        for theta in exact_ik(x, theta1):
+            assert distance_to_branches(theta, branches) < step, np.degrees(theta)
+
+
+def test_the_papers_goal_is_a_critical_value_with_three_crossing_branches(rng):
+    """x_g = [1, 0] is reached by folded, singular configurations: three loops cross there."""
+    branches = trace_self_motion_manifolds(ARM, np.array([1.0, 0.0]), rng)
+    assert len(branches) == 3
+    assert all(b.closed for b in branches)
+    # Link 2 folded back onto link 1 (θ2 = π) is a whole loop: link 3 points at the goal.
+    folded = [b for b in branches if np.allclose(np.cos(b.points[:, 1]), -1.0)]
+    assert len(folded) == 1
+    assert np.allclose(np.abs(folded[0].period), [2 * np.pi, 0.0, 2 * np.pi])
+    for singular in ([0.0, 0.0, np.pi], [0.0, np.pi, np.pi], [np.pi, np.pi, 0.0]):
+        assert np.linalg.matrix_rank(ARM.jacobian(np.array(singular)), tol=1e-9) == 1
+        assert distance_to_branches(np.array(singular), branches) < 0.05
+
+
+def test_free_arcs_follow_the_clearance(rng):
+    branch = trace_self_motion_manifolds(ARM, np.array([2.0, 0.0]), rng)[0]
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (1.0, 1.0, 0.0), radius=0.3)])
+    marked = mark_obstacle_free(branch, checker)
+    free = marked.free()
+    assert 0 < free.sum() < len(free)
+    for first, count in marked.free_arcs():
+        run = marked.arc_points(first, count)
+        assert np.all(checker.min_clearance(run) > 0)
+    assert sum(count for _, count in marked.free_arcs()) == free.sum()
+
+
+def test_joint_limits_cut_loops_open(rng):
+    arm = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'),
+                      joint_limits=(None, (-2.0, 2.0), (-2.0, 2.0)))
+    branches = trace_self_motion_manifolds(arm, np.array([1.0, 0.0]), rng)
+    assert branches and not any(b.closed for b in branches)
+    for b in branches:
+        assert np.all(np.abs(b.points[:, 1:]) <= 2.0)
+
+
+def test_projection_into_a_failure_plane_keeps_the_locked_joint(rng):
+    for theta in rng.uniform(-np.pi, np.pi, (20, 3)):
+        solved = project_to_preimage(ARM, np.array([1.2, 0.4]), theta, fixed_joint=1)
+        if solved is not None:
+            assert solved[1] == theta[1]
+            assert np.linalg.norm(ARM.forward_kinematics(solved) - [1.2, 0.4]) < 1e-10
+
+
+def test_self_motion_path_joins_two_configurations(rng):
+    x = np.array([2.0, 0.0])
+    a = project_to_preimage(ARM, x, np.radians([10.0, -40.0, 50.0]))
+    b = project_to_preimage(ARM, x, np.radians([-70.0, 110.0, -20.0]))
+    path = self_motion_path(ARM, x, a, b)
+    assert np.allclose(path[0], a) and np.allclose(path[-1], b)
+    assert np.abs(ARM.forward_kinematics(path) - x).max() < 1e-9
+    assert np.max(np.linalg.norm(np.diff(path, axis=0), axis=1)) <= ManifoldOptions().step_max * 1.5
+    other = project_to_preimage(ARM, np.array([2.5, 0.0]), b)
+    assert self_motion_path(ARM, x, a, other) is None  # not on the same manifold
+
+
+def test_cache_returns_the_same_branches(rng):
+    cache = ManifoldCache(size=1)
+    first = cache.trace(ARM, np.array([2.0, 0.0]), rng)
+    assert cache.trace(ARM, np.array([2.0, 0.0]), rng) is first
+    cache.trace(ARM, np.array([1.0, 0.0]), rng)
+    assert cache.trace(ARM, np.array([2.0, 0.0]), rng) is not first  # evicted

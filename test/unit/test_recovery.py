@@ -1,0 +1,101 @@
+"""Step 7: recovery by slicing S_F, checked at every combinatorially distinct lock."""
+
+import numpy as np
+import pytest
+from conftest import SCENES, paper_scene
+
+from ftplan_ros.core import CollisionChecker, InputError, load_scene, plan, recover
+from ftplan_ros.core.paths import densify
+
+
+@pytest.fixture(scope='module')
+def plans():
+    out = {}
+    for name in ('fig3a', 'fig3c'):
+        scene = load_scene(SCENES / f'{name}.yaml')
+        out[name] = (scene, plan(scene))
+    scene = paper_scene()
+    out['free'] = (scene, plan(scene))
+    return out
+
+
+def lock_points(surface, joint):
+    """A lock on the nominal path at every level where the slice's combinatorics can change.
+
+    The slice graph only changes when the level passes a web vertex value, so the vertex
+    values in the nominal range and the midpoints between them cover every case.
+    """
+    nominal = surface.nominal_path
+    values = np.unique(surface.vertices[:, joint])
+    low, high = sorted((nominal[0, joint], nominal[-1, joint]))
+    critical = values[(values >= low) & (values <= high)]
+    levels = np.unique(np.concatenate([critical, (critical[1:] + critical[:-1]) / 2]))
+    start, end = nominal[0], nominal[-1]
+    if start[joint] == end[joint]:  # the nominal path is this joint's hit path: any point
+        return [start + t * (end - start) for t in np.linspace(0, 1, 7)]
+    points = []
+    for level in levels:
+        t = (level - start[joint]) / (end[joint] - start[joint])
+        point = start + t * (end - start)
+        point[joint] = level
+        points.append(point)
+    return points
+
+
+@pytest.mark.parametrize('name', ['fig3a', 'fig3c', 'free'])
+def test_every_lock_on_the_nominal_path_recovers(plans, name):
+    scene, result = plans[name]
+    surface = result.surface
+    goal = np.asarray(scene.task.goal)
+    tried = 0
+    for joint in range(3):
+        for theta in lock_points(surface, joint):
+            rescue = recover(surface, theta, joint)
+            assert rescue is not None, (joint, np.degrees(theta))
+            assert np.all(rescue.path[:, joint] == theta[joint])
+            assert np.allclose(rescue.path[0], theta)
+            assert np.linalg.norm(scene.robot.forward_kinematics(rescue.path[-1]) - goal) \
+                <= scene.task.goal_tolerance
+            tried += 1
+    assert tried > 300
+
+
+@pytest.mark.parametrize('name', ['fig3a', 'fig3c'])
+def test_recovery_paths_are_collision_free_when_sampled_densely(plans, name):
+    scene, result = plans[name]
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    for progress in np.linspace(0, 1, 9):
+        theta = result.nominal_path[0] + progress * (result.nominal_path[-1]
+                                                     - result.nominal_path[0])
+        for joint in range(3):
+            path = recover(result.surface, theta, joint).path
+            assert checker.min_clearance(densify(path, 0.002)).min() > 0
+
+
+def test_locks_at_the_ends(plans):
+    scene, result = plans['fig3a']
+    for joint in range(3):
+        at_start = recover(result.surface, result.theta_s, joint)
+        assert at_start is not None
+        at_goal = recover(result.surface, result.nominal_path[-1], joint)
+        assert at_goal.length == pytest.approx(0.0, abs=1e-9)
+
+
+def test_the_hit_path_keeps_its_joint_fixed(plans):
+    _, result = plans['fig3a']
+    surface = result.surface
+    for joint, k in enumerate(surface.hit_paths):
+        assert np.all(surface.paths[k, :, joint] == result.theta_s[joint])
+
+
+def test_bad_locks_are_rejected(plans):
+    _, result = plans['free']
+    theta = result.nominal_path[3]
+    with pytest.raises(InputError, match='joint: must be in 0..2'):
+        recover(result.surface, theta, 3)
+    with pytest.raises(InputError, match='theta: must be 3 finite angles'):
+        recover(result.surface, np.array([np.nan, 0.0, 0.0]), 0)
+    with pytest.raises(InputError, match='not on the nominal path'):
+        recover(result.surface, theta + np.array([0.0, 0.1, 0.0]), 0)
+    with pytest.raises(InputError, match='not on the nominal path'):
+        recover(result.surface, theta + 10.0, 1)

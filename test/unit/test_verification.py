@@ -1,0 +1,121 @@
+"""The self-check: its certificates against brute force, and its refusals."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from conftest import paper_scene
+
+from ftplan_ros.core import CollisionChecker, plan
+from ftplan_ros.core.robot import PlanarChain
+from ftplan_ros.core.scene import Obstacle
+from ftplan_ros.core.verification import (
+    certify_simplices,
+    certify_surface,
+    goal_row_error,
+    structure_problem,
+    verify_surface,
+)
+
+ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
+X_GOAL = np.array([1.0, 0.0])
+
+
+def dense_triangle_points(corners, count=40):
+    """Barycentric grid points (m, n) of a triangle (3, n)."""
+    out = []
+    for i in range(count + 1):
+        for j in range(count + 1 - i):
+            k = count - i - j
+            out.append((i * corners[0] + j * corners[1] + k * corners[2]) / count)
+    return np.array(out)
+
+
+def test_certified_triangles_never_collide_under_dense_sampling():
+    rng = np.random.default_rng(8)
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (1.3, 0.8, 0.0), radius=0.25),
+                                     Obstacle('sphere', (-0.5, 1.5, 0.0), radius=0.3)])
+    certified = refused = 0
+    for _ in range(60):
+        center = rng.uniform(-np.pi, np.pi, 3)
+        corners = center + rng.uniform(-0.15, 0.15, (3, 3))
+        ok, _, _, _ = certify_simplices(checker, corners[None], 0.0, max_depth=6)
+        sampled = checker.min_clearance(dense_triangle_points(corners)).min()
+        if ok:
+            certified += 1
+            assert sampled > 0
+        else:
+            refused += 1
+    assert certified > 10 and refused > 3  # both outcomes exercised
+
+
+def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (1.5, 0.0, 0.0), radius=0.1)])
+    through = np.array([[[0.0, 0.3, 0.0], [0.0, -0.3, 0.0], [0.05, 0.0, 0.0]]])
+    assert not certify_simplices(checker, through, 0.0, 6)[0]
+    clear = np.array([[[2.0, 0.0, 0.0], [2.1, 0.0, 0.0], [2.0, 0.1, 0.0]]])
+    ok, _, smallest, _ = certify_simplices(checker, clear, 0.0, 6)
+    assert ok
+    assert not certify_simplices(checker, clear, smallest + 0.01, 6)[0]
+    segment = np.array([[[0.0, 0.3, 0.0], [0.0, -0.3, 0.0]]])
+    assert not certify_simplices(checker, segment, 0.0, 6)[0]
+
+
+def test_goal_row_bound_holds_against_dense_sampling():
+    # The branches for [1, 0] are straight lines in joint space; the one for [2, 0] curves.
+    from ftplan_ros.core.manifolds import trace_self_motion_manifolds
+    curved = 0
+    for x in (X_GOAL, np.array([2.0, 0.0])):
+        for branch in trace_self_motion_manifolds(ARM, x, np.random.default_rng(1)):
+            for stride in (1, 5, 20):
+                points = branch.points[::stride]
+                bound = goal_row_error(ARM, x, points, samples=4)
+                t = np.linspace(0, 1, 200)[None, :, None]
+                chords = points[:-1, None] + t * (points[1:, None] - points[:-1, None])
+                true = np.linalg.norm(ARM.forward_kinematics(chords) - x, axis=-1).max()
+                assert true <= bound
+                if true > 1e-4:  # a curved branch: the bound is not uselessly loose
+                    curved += 1
+                    assert bound < 3 * true
+    assert curved >= 2
+
+
+@pytest.fixture(scope='module')
+def free_plan():
+    scene = paper_scene()
+    return scene, plan(scene)
+
+
+def test_structure_problems_are_named(free_plan):
+    _, result = free_plan
+    surface = result.surface
+    assert structure_problem(surface) == ''
+    bent = surface.paths.copy()
+    bent[surface.nominal, 5, 0] += 0.5
+    assert 'not monotonic' in structure_problem(replace(surface, paths=bent))
+    off_plane = surface.paths.copy()
+    k = surface.hit_paths[2]
+    off_plane[k, 3, 2] += 1e-9
+    assert 'H_3 hit leaves the failure plane' in structure_problem(replace(surface,
+                                                                             paths=off_plane))
+    moved = surface.paths.copy()
+    moved[4, 0, 1] += 1e-12
+    assert 'start at θ_s' in structure_problem(replace(surface, paths=moved))
+
+
+def test_an_obstacle_across_the_surface_fails_the_check(free_plan):
+    scene, result = free_plan
+    surface = result.surface
+    middle = surface.paths[len(surface.paths) // 2, surface.paths.shape[1] // 2]
+    elbow = ARM.joint_positions(middle)[2]
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (elbow[0], elbow[1], 0.0), radius=0.05)])
+    verdict = verify_surface(surface, checker, X_GOAL, 0.01)
+    assert not verdict.ok and 'not collision-free' in verdict.reason
+    assert verify_surface(surface, CollisionChecker(ARM, []), X_GOAL, 0.01).ok
+
+
+def test_a_goal_row_off_the_goal_fails_the_check(free_plan):
+    _, result = free_plan
+    verdict = certify_surface(result.surface, CollisionChecker(ARM, []), X_GOAL + [0.05, 0.0],
+                              0.01)
+    assert not verdict.ok and 'goal row strays' in verdict.reason
