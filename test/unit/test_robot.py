@@ -57,3 +57,10 @@ def test_limits_and_periodic_joints():
 def test_mismatched_names_are_rejected():
     with pytest.raises(InputError, match='robot.joint_names'):
         PlanarChain((1.0, 1.0), ('a',))
+
+
+def test_fused_kinematics_match_the_batched_functions(rng):
+    for theta in rng.uniform(-np.pi, np.pi, (20, 3)):
+        position, jacobian = ROBOT.kinematics(theta)
+        assert np.allclose(position, ROBOT.forward_kinematics(theta), atol=1e-14)
+        assert np.allclose(jacobian, ROBOT.jacobian(theta), atol=1e-14)

@@ -1,14 +1,12 @@
 """Exhaustive joint-space grids: the reference the planner is checked and timed against.
 
-Every cell of a grid over joint space is judged by its centre, with the cell's motion
-bound added, so a cell counts as *possibly free* when some configuration in it might be
-collision-free and as *possibly a goal* when some configuration in it might reach x.
-Both over-approximate, and cells touching at a face, edge or corner are neighbours, so
-the flood fills below can only say "no" when the true answer is no:
-
-* `recoverable_in_plane`: with joint i locked at θ_i, can the arm at θ reach x_g?
-* `grid_plan`: is there a failure-tolerant motion at all (a path of cells from M_s to M_g
-  along which every locked joint leaves a way to M_g)?
+* `recoverable_in_plane` (the referee): with joint i locked at θ_i, can the arm at θ reach
+  x_g? Every cell of a grid over the failure plane is judged by its centre with the
+  cell's motion bound added, so it counts as *possibly free* when some configuration in
+  it might be collision-free, and as *possibly a goal* when some configuration in it
+  might reach x_g; cells touching at a face, edge or corner are neighbours. The flood
+  fill over-approximates, so its "no" proves that the arm cannot recover.
+* `grid_plan` (the baseline): the exhaustive grid planner for the whole problem.
 """
 
 from __future__ import annotations
@@ -21,6 +19,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from .collision import CollisionChecker
+from .manifolds import ManifoldOptions, trace_self_motion_manifolds
 from .robot import Robot
 
 
@@ -135,17 +134,20 @@ def grid_plan(checker: CollisionChecker, x_start: np.ndarray, x_goal: np.ndarray
               cells_per_joint: int) -> GridPlan:
     """Run the exhaustive baseline: grid, flood fill in every failure plane, path search.
 
-    A cell is safe when, for every joint i, its slice of the grid along axis i connects
-    it to a goal cell through possibly-free cells. The motion exists (possibly) when a
-    start cell and a goal cell lie in one component of safe cells.
+    As a plain grid planner would, a cell is free when its centre is collision-free; goal
+    and start cells are those the self-motion manifolds pass through. A cell is safe when,
+    for every joint i, its slice of the grid along axis i connects it to a goal cell
+    through free cells. A motion exists when a start cell and a goal cell lie in one
+    component of safe cells. (Centre sampling can miss narrow passages: its "no" is not a
+    proof.)
     """
     robot = checker.robot
     grid = JointGrid.over(robot, cells_per_joint)
     centers = grid.centers()
     half = 0.5 * grid.step
-    free = possibly_free(checker, centers, half)
-    goal = possibly_goal(robot, x_goal, centers, half) & free
-    start = possibly_goal(robot, x_start, centers, half) & free
+    free = possibly_free(checker, centers, np.zeros_like(half))
+    goal = _preimage_cells(robot, grid, x_goal) & free
+    start = _preimage_cells(robot, grid, x_start) & free
     safe = free.copy()
     for joint in range(robot.n_joints):
         others = np.delete(grid.periodic, joint)
@@ -160,3 +162,15 @@ def grid_plan(checker: CollisionChecker, x_start: np.ndarray, x_goal: np.ndarray
     labels = label_periodic(safe, grid.periodic)
     joined = np.intersect1d(np.unique(labels[start & safe]), np.unique(labels[goal & safe]))
     return GridPlan(bool(np.any(joined > 0)), int(safe.sum()), int(free.sum()))
+
+
+def _preimage_cells(robot: Robot, grid: JointGrid, x: np.ndarray) -> np.ndarray:
+    """Mark (bool, *shape) the cells that a self-motion manifold of x (m,) [m] crosses."""
+    step = 0.25 * float(grid.step.min())  # samples several times finer than the cells
+    branches = trace_self_motion_manifolds(robot, x, np.random.default_rng(0),
+                                           ManifoldOptions(step_max=step))
+    marked = np.zeros(grid.shape, dtype=bool)
+    for branch in branches:
+        for theta in branch.points:
+            marked[grid.cell_of(theta)] = True
+    return marked

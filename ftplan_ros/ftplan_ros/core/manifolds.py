@@ -31,7 +31,7 @@ log = logging.getLogger(__name__)
 class ManifoldOptions:
     """Continuation settings (steps in joint space [rad], residuals [m])."""
 
-    step_max: float = 0.03
+    step_max: float = 0.05
     step_min: float = 1e-5
     max_turn: float = 0.3  # largest tangent turn [rad] accepted in one step
     tolerance: float = 1e-10

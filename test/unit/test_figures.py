@@ -1,0 +1,298 @@
+import re
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.patches import Circle, Polygon
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from ftplan_ros import figures
+from ftplan_ros.core import (
+    CollisionChecker,
+    Obstacle,
+    PlanarChain,
+    PlanResult,
+    load_scene,
+    plan,
+    recover,
+)
+from ftplan_ros.core.angles import wrap_angle
+from ftplan_ros.core.paths import path_until, point_at_fraction
+
+REPO = Path(__file__).resolve().parents[2]
+PNG_SIGNATURE = b'\x89PNG\r\n\x1a\n'
+
+
+@pytest.fixture(scope='module')
+def scene():
+    return load_scene(REPO / 'config' / 'scenes' / 'fig3a.yaml')
+
+
+@pytest.fixture(scope='module')
+def result(scene):
+    result = plan(scene)
+    assert result.feasible, result.reason
+    return result
+
+
+@pytest.fixture(scope='module')
+def drill_motion(result):
+    """A drill as `drill_once` runs it: joint 2 locks 45 % along the nominal path."""
+    joint, progress = 1, 0.45
+    before = path_until(result.nominal_path, progress)
+    rescue = recover(result.surface, point_at_fraction(result.nominal_path, progress), joint)
+    return np.vstack([before, rescue.path]), len(before) - 1, joint
+
+
+def artists(ax, gid):
+    return [artist for artist in ax.get_children() if artist.get_gid() == gid]
+
+
+def only(ax, gid):
+    found = artists(ax, gid)
+    assert len(found) == 1, f'{len(found)} artists with gid {gid!r}'
+    return found[0]
+
+
+def joint_angles(points):
+    """Relative joint angles (n,) [rad] of an arm drawn through base, joints and tip (n+1, 2)."""
+    steps = np.diff(points, axis=0)
+    absolute = np.arctan2(steps[:, 1], steps[:, 0])
+    return np.diff(absolute, prepend=0.0)
+
+
+def arm_points(line):
+    return np.column_stack(line.get_data())
+
+
+def test_workspace_figure_draws_obstacles_theta_s_and_the_hits(scene, result):
+    figure = figures.workspace_figure(scene, result)
+    (ax,) = figure.axes
+    # One disk per obstacle, where the obstacle is, and no other patch.
+    assert len(ax.patches) == len(scene.obstacles)
+    for patch, obstacle in zip(ax.patches, scene.obstacles, strict=True):
+        assert isinstance(patch, Circle) and patch.get_gid() == 'obstacle'
+        assert np.allclose(patch.center, obstacle.center[:2])
+        assert patch.radius == pytest.approx(obstacle.radius)
+    # The arm at θ_s plus one arm per failure-plane hit, nothing else.
+    arms = sorted(line.get_gid() for line in ax.lines if line.get_gid().startswith('arm:'))
+    assert arms == ['arm:H1', 'arm:H2', 'arm:H3', 'arm:theta_s']
+    start = only(ax, 'arm:theta_s')
+    assert np.allclose(arm_points(start), scene.robot.joint_positions(result.theta_s))
+    assert np.allclose(arm_points(start)[-1], scene.task.start, atol=1e-6)
+    assert start.get_linewidth() > 2.0 and start.get_color() == 'k'
+    colours = set()
+    for i in range(scene.robot.n_joints):
+        hit = only(ax, f'arm:H{i + 1}')
+        assert hit.get_label() == f'H{i + 1} hit'
+        assert np.linalg.norm(arm_points(hit)[-1] - scene.task.goal) <= scene.task.goal_tolerance
+        # Joint i keeps its θ_s angle: the drawn arm lies in the failure plane H_i(θ_s).
+        drawn = joint_angles(arm_points(hit))
+        assert abs(wrap_angle(drawn[i] - result.theta_s[i])) < 1e-6
+        colours.add(hit.get_color())
+    assert len(colours) == scene.robot.n_joints
+    trace = only(ax, 'trace')
+    assert trace.get_linestyle() == '--'
+    xy = np.column_stack(trace.get_data())
+    assert np.allclose(xy[0], scene.task.start, atol=1e-6)
+    assert np.linalg.norm(xy[-1] - scene.task.goal) <= scene.task.goal_tolerance
+    assert only(ax, 'x_s').get_label() and only(ax, 'x_g').get_label()
+    assert ax.get_xlabel() == 'x [m]' and ax.get_ylabel() == 'y [m]'
+    assert ax.get_aspect() == 1.0
+    for value in np.degrees(result.theta_s):
+        assert f'{value:.1f}°' in ax.get_title()
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert {'H1 hit', 'H2 hit', 'H3 hit', r'$\theta_s$'} <= set(labels)
+
+
+def test_joint_space_figure_draws_manifolds_theta_s_hits_and_the_surface(scene, result):
+    figure = figures.joint_space_figure(scene, result)
+    (ax,) = figure.axes
+    assert ax.name == '3d'
+    for label in (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()):
+        assert label.endswith('[deg]')
+    assert np.allclose(np.column_stack(only(ax, 'theta_s').get_data_3d())[0],
+                       np.degrees(result.theta_s))
+    surface = result.surface
+    for i, path in enumerate(surface.hit_paths):
+        hit = np.column_stack(only(ax, f'hit:H{i + 1}').get_data_3d())[0]
+        assert np.allclose(hit, np.degrees(surface.goal_points[path]))
+        assert hit[i] == pytest.approx(np.degrees(result.theta_s[i]))  # on H_i(θ_s)
+    web = only(ax, 'S_F')
+    assert isinstance(web, Poly3DCollection)
+    figure.canvas.draw()
+    assert len(web.get_paths()) == len(surface.triangles)
+    boundary = np.column_stack(only(ax, 'S_F:boundary').get_data_3d())
+    assert np.allclose(boundary[0], np.degrees(result.theta_s))
+    nominal = np.column_stack(only(ax, 'nominal').get_data_3d())
+    assert np.allclose(nominal, np.degrees(result.nominal_path))
+    # Manifolds: dashed, one line per branch, wrapped and broken where they cross the seam.
+    for gid, branches in (('M_s', result.start_manifolds), ('M_g', result.goal_manifolds)):
+        lines = artists(ax, gid)
+        assert len(lines) == len(branches)
+        for line in lines:
+            assert line.get_linestyle() == '--'
+            points = np.column_stack(line.get_data_3d())
+            finite = points[np.isfinite(points).all(axis=1)]
+            assert np.all((finite > -180.0 - 1e-9) & (finite <= 180.0 + 1e-9))
+            steps = np.abs(np.diff(points, axis=0))
+            assert np.all(steps[np.isfinite(steps).all(axis=1)] < 180.0)
+    assert any(np.isnan(np.column_stack(line.get_data_3d())).any()
+               for line in artists(ax, 'M_g')), 'M_g of fig3a crosses the seam'
+    candidates = np.column_stack(only(ax, 'Theta_S').get_data_3d())
+    assert len(candidates) == len(result.theta_S)
+    # C-space obstacles: every drawn cell centre collides.
+    cells = np.radians(np.column_stack(only(ax, 'C_obs').get_data_3d()))
+    assert len(cells) > 100
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    assert np.all(checker.min_clearance(cells) <= 0.0)
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert r'$\mathcal{S}_F$' in labels and r'$\theta_s$' in labels
+
+
+def test_c_space_cells_are_the_surface_of_the_checker_s_obstacles():
+    robot = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=0.05)
+    obstacles = [Obstacle('box', (1.3, 0.9, 0.0), size=(0.5, 0.2, 1.0), rpy=(0.0, 0.0, 0.6)),
+                 Obstacle('cylinder', (-1.2, 0.9, 0.2), radius=0.15, length=1.0,
+                          rpy=(0.8, 0.0, 0.3)),
+                 Obstacle('sphere', (0.8, -1.2, 0.1), radius=0.3)]
+    cells = 12
+    drawn = figures._c_space_obstacle_cells(robot, obstacles, cells)
+    # The same grid, every cell through the checker, then its colliding cells with a free
+    # neighbour (all joints wrap).
+    axis = -np.pi + (np.arange(cells) + 0.5) * 2.0 * np.pi / cells
+    grid = np.stack(np.meshgrid(axis, axis, axis, indexing='ij'), axis=-1).reshape(-1, 3)
+    solid = (CollisionChecker(robot, obstacles).min_clearance(grid) <= 0.0)
+    solid = solid.reshape(cells, cells, cells)
+    free_neighbour = np.zeros_like(solid)
+    for k in range(3):
+        for shift in (1, -1):
+            free_neighbour |= ~np.roll(solid, shift, axis=k)
+    expected = grid[(solid & free_neighbour).ravel()]
+    assert 0 < len(expected) < len(grid)
+    assert len(drawn) == len(expected)
+    assert set(map(tuple, np.round(drawn, 9))) == set(map(tuple, np.round(expected, 9)))
+
+
+def test_obstacle_sections_are_drawn_where_they_cut_the_arm_plane(scene):
+    obstacles = (Obstacle('box', (1.0, 1.0, 0.0), size=(0.4, 0.2, 1.0), rpy=(0.0, 0.0, 0.5)),
+                 Obstacle('sphere', (-1.0, 0.0, 0.3), radius=0.5),
+                 Obstacle('sphere', (0.0, -1.0, 0.6), radius=0.5),      # above the plane
+                 Obstacle('cylinder', (-1.0, -1.0, 0.0), radius=0.2, length=0.4),
+                 Obstacle('cylinder', (1.0, -1.0, 0.0), radius=0.2, length=2.0,
+                          rpy=(np.pi / 3, 0.0, 0.0)))
+    boxed = type(scene)(scene.robot, obstacles, scene.task, scene.frame_id, 'shapes')
+    refused = PlanResult(False, scene.robot.joint_names, reason='not planned')
+    (ax,) = figures.workspace_figure(boxed, refused).axes
+    box, sphere, upright, tilted = ax.patches
+    assert isinstance(box, Polygon)
+    c, s = np.cos(0.5), np.sin(0.5)
+    corners = np.array([[1.0, 1.0]]) + np.array([[0.2, 0.1], [-0.2, 0.1], [-0.2, -0.1],
+                                                 [0.2, -0.1]]) @ np.array([[c, s], [-s, c]])
+    drawn = box.get_xy()[:-1]
+    assert len(drawn) == 4
+    assert all(np.min(np.linalg.norm(drawn - corner, axis=1)) < 1e-9 for corner in corners)
+    assert sphere.radius == pytest.approx(0.4)  # sqrt(0.5² - 0.3²)
+    assert isinstance(upright, Circle) and upright.radius == pytest.approx(0.2)
+    # A cylinder tilted by 60° about x cuts the plane in an ellipse 0.4 wide, 0.8 long.
+    extent = np.ptp(tilted.get_xy(), axis=0)
+    assert extent == pytest.approx([0.4, 0.8], rel=0.01)
+
+
+def test_an_infeasible_result_is_drawn_with_its_reason(scene):
+    refused = PlanResult(False, scene.robot.joint_names,
+                         reason='every start configuration collides (M_s^F is empty)')
+    (ax,) = figures.workspace_figure(scene, refused).axes
+    assert len(ax.patches) == len(scene.obstacles)
+    assert not [line for line in ax.lines if line.get_gid().startswith('arm:')]
+    assert artists(ax, 'x_s') and artists(ax, 'x_g')
+    assert 'every start configuration collides' in ax.get_title().replace('\n', ' ')
+    (ax3,) = figures.joint_space_figure(scene, refused, grid_cells=0).axes
+    assert not artists(ax3, 'S_F') and not artists(ax3, 'theta_s')
+
+
+def test_a_start_the_planner_rejects_is_drawn_in_both_panels(scene, result):
+    # An obstacle on the elbow of the chosen θ_s: that start is no longer failure-tolerant.
+    elbow = scene.robot.joint_positions(result.theta_s)[1]
+    blocked = scene.with_obstacles([Obstacle('sphere', (*elbow, 0.0), radius=0.1)])
+    refused = plan(blocked, start_configuration=result.theta_s)
+    assert not refused.feasible and refused.reason
+    figure = figures.plan_figure(blocked, refused, grid_cells=16)
+    workspace, joint_space = figure.axes
+    assert 'no failure-tolerant plan' in figure.get_suptitle()
+    assert refused.reason[:30] in workspace.get_title().replace('\n', ' ')
+    assert len(workspace.patches) == len(blocked.obstacles)
+    assert joint_space.name == '3d'
+    assert artists(joint_space, 'M_s') and artists(joint_space, 'M_g')
+    assert not artists(joint_space, 'S_F')
+
+
+def test_plan_figure_puts_workspace_left_and_joint_space_right(scene, result):
+    figure = figures.plan_figure(scene, result, grid_cells=8)
+    left, right = figure.axes
+    assert left.name == 'rectilinear' and right.name == '3d'
+    assert left.get_position().x0 < right.get_position().x0
+    assert artists(left, 'arm:theta_s') and artists(right, 'S_F')
+    assert 'failure-tolerant plan' in figure.get_suptitle()
+
+
+def test_motion_figure_marks_the_failure_and_the_final_configuration(scene, drill_motion):
+    motion, failure_index, joint = drill_motion
+    (ax,) = figures.motion_figure(scene, motion, failure_index, joint).axes
+    robot = scene.robot
+    failed = only(ax, 'arm:failure')
+    assert np.allclose(arm_points(failed), robot.joint_positions(motion[failure_index]))
+    assert failed.get_color() == figures.FAILURE_COLOUR
+    circle = np.column_stack(only(ax, 'locked_joint').get_data())[0]
+    assert np.allclose(circle, robot.joint_positions(motion[failure_index])[joint])
+    final = only(ax, 'arm:final')
+    assert np.linalg.norm(arm_points(final)[-1] - scene.task.goal) <= scene.task.goal_tolerance
+    assert len(artists(ax, 'snapshot')) == figures.SNAPSHOTS
+    before, after = only(ax, 'trace'), only(ax, 'trace:recovery')
+    assert np.allclose(before.get_xydata()[-1], after.get_xydata()[0])
+    assert len(ax.patches) == len(scene.obstacles)
+    title = ax.get_title()
+    assert robot.joint_names[joint] in title
+    assert f'{np.degrees(motion[failure_index, joint]):.1f}°' in title
+    assert artists(ax, 'x_g')
+
+
+def test_motion_figure_without_a_failure_and_its_input_checks(scene, result):
+    (ax,) = figures.motion_figure(scene, result.nominal_path, None, None, title='nominal').axes
+    assert ax.get_title() == 'nominal'
+    assert not artists(ax, 'arm:failure') and not artists(ax, 'locked_joint')
+    assert artists(ax, 'arm:final')
+    with pytest.raises(ValueError, match='shape'):
+        figures.motion_figure(scene, result.nominal_path[:, :2], None, None)
+    with pytest.raises(ValueError, match='failure_index'):
+        figures.motion_figure(scene, result.nominal_path, len(result.nominal_path), 0)
+    with pytest.raises(ValueError, match='locked_joint'):
+        figures.motion_figure(scene, result.nominal_path, 3, 5)
+    with pytest.raises(ValueError, match='failure_index'):
+        figures.motion_figure(scene, result.nominal_path, None, 0)
+
+
+def test_save_figure_writes_a_png(tmp_path, scene, drill_motion):
+    motion, failure_index, joint = drill_motion
+    figure = figures.motion_figure(scene, motion, failure_index, joint)
+    path = figures.save_figure(figure, tmp_path / 'drills' / 'new' / 'drill.png')
+    assert path == tmp_path / 'drills' / 'new' / 'drill.png'
+    data = path.read_bytes()
+    assert data.startswith(PNG_SIGNATURE)
+    width, height = struct.unpack('>II', data[16:24])  # the IHDR chunk
+    expected = np.asarray(figure.get_size_inches()) * figures.DPI
+    assert (width, height) == tuple(np.round(expected).astype(int))
+    with pytest.raises(ValueError, match='.png'):
+        figures.save_figure(figure, tmp_path / 'drill.svg')
+
+
+def test_figures_never_load_pyplot_and_the_core_never_imports_them():
+    code = ('import sys, ftplan_ros.figures; '
+            'sys.exit("matplotlib.pyplot" in sys.modules)')
+    assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0
+    imports_figures = re.compile(r'^\s*(from|import)\s+[\w.]*figures', re.MULTILINE)
+    for source in (REPO / 'ftplan_ros' / 'ftplan_ros' / 'core').glob('*.py'):
+        assert not imports_figures.search(source.read_text()), source.name

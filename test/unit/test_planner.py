@@ -1,0 +1,148 @@
+"""The planner end to end: a trivial, the paper's, and impossible cases; bad input; brute force."""
+
+import numpy as np
+import pytest
+from conftest import SCENES, paper_scene
+
+from ftplan_ros.core import CollisionChecker, InputError, load_scene, parse_scene, plan
+from ftplan_ros.core.brute_force import recoverable_in_plane
+from ftplan_ros.core.paths import point_at_fraction
+from ftplan_ros.core.scene import Obstacle, Task
+
+X_GOAL = np.array([1.0, 0.0])
+
+
+@pytest.fixture(scope='module')
+def fig3a():
+    scene = load_scene(SCENES / 'fig3a.yaml')
+    return scene, plan(scene)
+
+
+def test_obstacle_free_paper_task_is_feasible_and_reported():
+    scene = paper_scene()
+    result = plan(scene)
+    assert result.feasible and result.reason == ''
+    data = result.to_json()
+    for key in ('feasible', 'joint_names', 'theta_s', 'nominal_path', 'failure_surface',
+                'failure_plane_hits', 'hypercube', 'stats'):
+        assert key in data
+    assert 'reason' not in data
+    assert np.allclose(scene.robot.forward_kinematics(result.theta_s), [2.0, 0.0], atol=1e-9)
+    assert np.allclose(scene.robot.forward_kinematics(result.nominal_path[-1]), X_GOAL,
+                       atol=1e-9)
+    for joint, hit in enumerate(result.failure_plane_hits):
+        assert np.cos(hit[joint] - result.theta_s[joint]) == pytest.approx(1.0)
+        assert np.linalg.norm(scene.robot.forward_kinematics(hit) - X_GOAL) < 1e-9
+    lower, upper = result.hypercube
+    assert np.all(lower <= result.nominal_path.min(axis=0) + 1e-12)
+    assert np.all(upper >= result.nominal_path.max(axis=0) - 1e-12)
+    stats = result.stats
+    assert stats['collision_checks'] >= 0 and stats['plan_time_s'] > 0
+    assert stats['criterion'] and stats['theta_S'] <= stats['start_candidates']
+
+
+@pytest.mark.parametrize('name', ['fig3a', 'fig3b', 'fig3c'])
+def test_paper_like_scenes_are_feasible_with_clearance(name):
+    scene = load_scene(SCENES / f'{name}.yaml')
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.stats['min_clearance_m'] > 0
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    assert checker.min_clearance(result.nominal_path).min() > 0
+
+
+def test_same_seed_same_plan():
+    scene = load_scene(SCENES / 'fig3b.yaml')
+    first = plan(scene, rng=np.random.default_rng(4))
+    second = plan(scene, rng=np.random.default_rng(4))
+    assert np.array_equal(first.theta_s, second.theta_s)
+    assert np.array_equal(first.surface.paths, second.surface.paths)
+
+
+def test_chosen_start_beats_the_others_on_the_criterion(fig3a):
+    """θ_s is the start whose coarse surface keeps the largest vertex clearance."""
+    scene, result = fig3a
+    assert result.stats['criterion_value_m'] > 0
+    others = [plan(scene, start_configuration=theta) for theta in result.proposed_starts[::6]]
+    scores = [r.stats.get('criterion_value_m', -np.inf) for r in others]
+    assert result.stats['criterion_value_m'] >= max(scores) - 1e-12
+
+
+def test_a_given_start_is_checked_not_replaced(fig3a):
+    scene, result = fig3a
+    again = plan(scene, start_configuration=result.theta_s)
+    assert again.feasible and np.allclose(again.theta_s, result.theta_s, atol=1e-9)
+    with pytest.raises(InputError, match='start_configuration: does not put'):
+        plan(scene, start_configuration=np.zeros(3))
+    blocked = scene.with_obstacles([Obstacle('sphere', (*scene.robot.joint_positions(
+        result.theta_s)[1], 0.0), radius=0.05)])
+    assert not plan(blocked, start_configuration=result.theta_s).feasible
+
+
+def test_infeasible_scene_says_why():
+    result = plan(load_scene(SCENES / 'infeasible.yaml'))
+    assert not result.feasible
+    assert 'necessary condition' in result.reason
+    assert result.surface is None and result.theta_s is None
+    assert result.to_json()['reason'] == result.reason
+
+
+def test_blocked_start_and_goal_say_why():
+    blocked_goal = paper_scene(obstacles=[((1.0, 0.0), 0.15)])
+    assert 'M_g^F is empty' in plan(blocked_goal).reason
+    blocked_start = paper_scene(obstacles=[((2.0, 0.0), 0.15)])
+    assert 'M_s^F is empty' in plan(blocked_start).reason
+
+
+def test_every_nominal_lock_may_recover_by_brute_force(fig3a):
+    """A flood fill in each failure plane (over-approximating, 1 deg cells) never refutes."""
+    scene, result = fig3a
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    for fraction in np.linspace(0.0, 1.0, 7):
+        theta = point_at_fraction(result.nominal_path, fraction)
+        for joint in range(3):
+            assert recoverable_in_plane(checker, theta, joint, X_GOAL, 360)
+
+
+def test_the_referee_can_refute():
+    """The brute-force check is not vacuous.
+
+    With joint 3 locked straight (θ3 = 0) the arm is a 2R arm of links 1 m and 2 m, which
+    reaches [1, 0] only fully folded, link 1 pointing to [-1, 0]. A disk on that link
+    leaves no goal in the failure plane (a big one: the check over-approximates).
+    """
+    theta = np.zeros(3)
+    free = paper_scene()
+    assert recoverable_in_plane(CollisionChecker(free.robot, free.obstacles), theta, 2,
+                                X_GOAL, 180)
+    blocked = paper_scene(obstacles=[((-0.5, 0.0), 0.4)])
+    checker = CollisionChecker(blocked.robot, blocked.obstacles)
+    assert checker.min_clearance(theta[None])[0] > 0
+    assert not recoverable_in_plane(checker, theta, 2, X_GOAL, 180)
+    assert recoverable_in_plane(checker, theta, 0, X_GOAL, 180)
+
+
+@pytest.mark.parametrize('change, field', [
+    (lambda s: s.with_task(None), 'task: is missing'),
+    (lambda s: s.with_task(Task((3.2, 0.0), (1.0, 0.0))), 'task.start: .* out of the arm'),
+    (lambda s: s.with_task(Task((2.0, 0.0), (0.0, 3.5))), 'task.goal: .* out of the arm'),
+    (lambda s: s.with_task(Task((2.0, 0.0), (2.0, 0.005))), 'task.goal: equals task.start'),
+    (lambda s: s.with_obstacles([Obstacle('sphere', (0.05, 0.0, 0.0), radius=0.1)]),
+     r'obstacles\[0\]: covers the robot base'),
+    (lambda s: s.with_obstacles([Obstacle('box', (0.0, 0.0, 0.0), size=(0.3, 0.3, 0.3))]),
+     r'obstacles\[0\]: covers the robot base'),
+])
+def test_unplannable_scenes_raise_naming_the_field(change, field):
+    with pytest.raises(InputError, match=field):
+        plan(change(paper_scene()))
+
+
+@pytest.mark.parametrize('lengths, message', [
+    ([1.0, 1.0], 'no redundancy'),
+    ([1.0, 1.0, 1.0, 1.0], 'degree of redundancy 2'),
+])
+def test_redundancy_is_checked(lengths, message):
+    scene = parse_scene({'robot': {'type': 'planar', 'link_lengths': lengths},
+                         'task': {'start': [1.5, 0.0], 'goal': [0.5, 0.5]}})
+    with pytest.raises(InputError, match=f'robot.link_lengths: .*{message}'):
+        plan(scene)
