@@ -33,6 +33,7 @@ PAPER = {
     'fig3c': ([2.5, 0.0], [23.5, -73.0, 70.9], 'random disks, start farther out'),
 }
 RADIUS = 0.2
+GAP = 0.03  # [m] the disks keep this far from the paper θ_s's failure surface
 
 
 def survivors(scene: Scene, cache: ManifoldCache, theta_s: np.ndarray) -> np.ndarray:
@@ -42,12 +43,29 @@ def survivors(scene: Scene, cache: ManifoldCache, theta_s: np.ndarray) -> np.nda
     return proposed[far]
 
 
+def clear_of(surface_points: np.ndarray, robot, center: np.ndarray) -> np.ndarray:
+    """Slide a disk centre (2,) [m] until the disk clears the arm at every surface point."""
+    for _ in range(4):
+        segments = robot.link_segments(surface_points)[..., :2]  # (k, L, 2, 2)
+        start, direction = segments[..., 0, :], segments[..., 1, :] - segments[..., 0, :]
+        t = np.clip(np.einsum('kld,kld->kl', center - start, direction)
+                    / np.einsum('kld,kld->kl', direction, direction), 0.0, 1.0)
+        nearest = start + t[..., None] * direction
+        gaps = np.linalg.norm(center - nearest, axis=-1)
+        k, j = np.unravel_index(np.argmin(gaps), gaps.shape)
+        if gaps[k, j] >= RADIUS + GAP:
+            break
+        away = (center - nearest[k, j]) / max(gaps[k, j], 1e-9)
+        center = center + (RADIUS + GAP - gaps[k, j]) * away
+    return center
+
+
 def design(name: str, rng: np.random.Generator, trials: int, target: int) -> Scene:
     """Add disks while the paper's θ_s stays feasible and the other starts die out.
 
-    Each disk is dropped on the arm, somewhere on a surviving start or on a straight
-    joint-space path from it towards a random goal configuration, where it is likely to
-    kill that start's failure surfaces.
+    Each disk is dropped on the arm of a surviving start (or on its way towards a random
+    goal configuration), then slid just clear of the paper θ_s's own failure surface, so
+    that it can kill the neighbours of θ_s without killing θ_s.
     """
     start, theta_deg, _ = PAPER[name]
     theta_s = np.radians(theta_deg)
@@ -55,8 +73,10 @@ def design(name: str, rng: np.random.Generator, trials: int, target: int) -> Sce
                          'task': {'start': start, 'goal': [1.0, 0.0],
                                   'goal_tolerance': 0.01}}, name=name)
     robot = scene.robot
-    cache = ManifoldCache()
-    goals = np.vstack([b.points for b in cache.trace(robot, np.array([1.0, 0.0]), rng)])
+    cache = ManifoldCache()  # filled by plan() itself, exactly as a default plan() samples
+    first = plan(scene, cache=cache, start_configuration=theta_s)
+    own = first.surface.vertices
+    goals = np.vstack([b.points for b in first.goal_manifolds])
     others = survivors(scene, cache, theta_s)
     for trial in range(trials):
         if len(others) <= target:
@@ -66,18 +86,20 @@ def design(name: str, rng: np.random.Generator, trials: int, target: int) -> Sce
             theta = theta + rng.uniform() * (goals[rng.integers(len(goals))] - theta)
         points = robot.joint_positions(theta)
         link = rng.integers(robot.n_joints)
-        point = points[link] + rng.uniform() * (points[link + 1] - points[link])
+        point = clear_of(own, robot, points[link] + rng.uniform() * (points[link + 1]
+                                                                      - points[link]))
         center = (round(float(point[0]), 3), round(float(point[1]), 3), 0.0)
         if np.hypot(*center[:2]) < 0.5 or any(
                 np.hypot(center[0] - ob.center[0], center[1] - ob.center[1]) < 2.0 * RADIUS
                 for ob in scene.obstacles):
             continue
         trial_scene = scene.with_obstacles([Obstacle('sphere', center, radius=RADIUS)])
-        if not plan(trial_scene, cache=cache, start_configuration=theta_s).feasible:
+        checked = plan(trial_scene, cache=cache, start_configuration=theta_s)
+        if not checked.feasible:
             continue
         remaining = survivors(trial_scene, cache, theta_s)
         if len(remaining) < len(others):
-            scene, others = trial_scene, remaining
+            scene, others, own = trial_scene, remaining, checked.surface.vertices
             print(f'{name}: trial {trial}: disk at {center[:2]} leaves {len(others)} other '
                   'starts', flush=True)
     return scene

@@ -1,0 +1,106 @@
+"""The `ftplan` command as users run it: outputs, files and exit codes."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+from conftest import SCENES
+
+
+def ftplan(*args, cwd=None):
+    return subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def test_plan_writes_the_contract_json(tmp_path):
+    out = tmp_path / 'plan.json'
+    run = ftplan('plan', SCENES / 'fig3a.yaml', '--json', out)
+    assert run.returncode == 0, run.stderr
+    assert 'feasible: theta_s = [' in run.stdout
+    assert 'H3 hit on M_g^F' in run.stdout
+    assert 'tracing self-motion manifolds' in run.stderr  # the progress lines
+    data = json.loads(out.read_text())
+    assert data['feasible'] is True
+    assert data['joint_names'] == ['joint1', 'joint2', 'joint3']
+    assert len(data['theta_s']) == 3 and len(data['failure_plane_hits']) == 3
+    paths = data['failure_surface']['paths']
+    assert data['nominal_path'] == paths[data['failure_surface']['nominal']]
+    assert set(data['hypercube']) == {'lower', 'upper'}
+    assert data['stats']['plan_time_s'] > 0
+
+
+def test_infeasible_plan_exits_1_with_the_reason(tmp_path):
+    out = tmp_path / 'plan.json'
+    run = ftplan('plan', SCENES / 'infeasible.yaml', '--json', out)
+    assert run.returncode == 1
+    assert 'no failure-tolerant plan: no candidate' in run.stdout
+    data = json.loads(out.read_text())
+    assert data['feasible'] is False and 'necessary condition' in data['reason']
+
+
+def test_drill_prints_a_summary_and_draws(tmp_path):
+    png = tmp_path / 'drill.png'
+    run = ftplan('drill', SCENES / 'fig3c.yaml', '--trials', 60, '--seed', 2, '--png', png)
+    assert run.returncode == 0, run.stderr
+    assert '60/60 trials reached the goal without collision' in run.stdout
+    assert run.stdout.count('joint') >= 4
+    assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def test_figure_writes_both_pictures(tmp_path):
+    run = ftplan('figure', SCENES / 'fig3b.yaml', '--out', tmp_path)
+    assert run.returncode == 0, run.stderr
+    for name in ('fig3b_workspace.png', 'fig3b_joint_space.png'):
+        assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_plan_png(tmp_path):
+    png = tmp_path / 'sub' / 'plan.png'
+    assert ftplan('plan', SCENES / 'fig3b.yaml', '--png', png).returncode == 0
+    assert png.read_bytes()[:4] == b'\x89PNG'
+
+
+BAD = {
+    'malformed.yaml': ('robot: {type: planar, link_lengths: [1, 1\n', 'malformed YAML at line'),
+    'unknown.yaml': ('robot: {type: planar, link_lengths: [1, 1, 1], colour: red}\n',
+                     'robot.colour: unknown key'),
+    'nan.yaml': ('robot: {type: planar, link_lengths: [1, .nan, 1]}\n'
+                 'task: {start: [2, 0], goal: [1, 0]}\n', r'robot.link_lengths[1]: must be finite'),
+    'negative.yaml': ('robot: {type: planar, link_lengths: [1, -1, 1]}\n',
+                      'robot.link_lengths[1]: must be > 0'),
+    'radius.yaml': ('robot: {type: planar, link_lengths: [1, 1, 1]}\n'
+                    'obstacles: [{type: sphere, center: [1, 1], radius: 0}]\n',
+                    'obstacles[0].radius: must be > 0'),
+    'reach.yaml': ('robot: {type: planar, link_lengths: [1, 1, 1]}\n'
+                   'task: {start: [2, 0], goal: [4, 0]}\n', 'task.goal: [4.0, 0.0] is out of'),
+    'same.yaml': ('robot: {type: planar, link_lengths: [1, 1, 1]}\n'
+                  'task: {start: [2, 0], goal: [2, 0]}\n', 'task.goal: equals task.start'),
+    'rigid.yaml': ('robot: {type: planar, link_lengths: [1, 1]}\n'
+                   'task: {start: [1.5, 0], goal: [0.5, 0.5]}\n', 'no redundancy'),
+    'base.yaml': ('robot: {type: planar, link_lengths: [1, 1, 1]}\n'
+                  'obstacles: [{type: sphere, center: [0.1, 0], radius: 0.3}]\n'
+                  'task: {start: [2, 0], goal: [1, 0]}\n', 'obstacles[0]: covers the robot base'),
+    'notask.yaml': ('robot: {type: planar, link_lengths: [1, 1, 1]}\n', 'task: is missing'),
+}
+
+
+@pytest.mark.parametrize('name', sorted(BAD))
+def test_bad_input_is_one_line_and_exit_2(tmp_path, name):
+    text, message = BAD[name]
+    (tmp_path / name).write_text(text)
+    run = ftplan('plan', tmp_path / name)
+    assert run.returncode == 2
+    assert message in run.stderr
+    assert 'Traceback' not in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1, run.stderr
+
+
+def test_missing_file_and_bad_arguments_exit_2(tmp_path):
+    run = ftplan('plan', tmp_path / 'nope.yaml')
+    assert run.returncode == 2 and 'cannot read scene file' in run.stderr
+    run = ftplan('drill', SCENES / 'fig3a.yaml', '--trials', 0)
+    assert run.returncode == 2 and '--trials: must be at least 1' in run.stderr
+    run = ftplan('plan', SCENES / 'fig3a.yaml', '--margin', 'nan')
+    assert run.returncode == 2 and '--margin' in run.stderr
+    assert ftplan('launch').returncode == 2  # argparse: unknown command

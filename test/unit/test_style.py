@@ -1,0 +1,32 @@
+"""Project rules that code review would otherwise have to catch."""
+
+import pkgutil
+import subprocess
+import sys
+from pathlib import Path
+
+import ftplan_ros.core
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_ruff_is_clean():
+    run = subprocess.run([sys.executable, '-m', 'ruff', 'check', 'ftplan_ros', 'ftplan_msgs_py',
+                          'test', 'benchmarks', 'tools'], cwd=REPO, capture_output=True,
+                         text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+
+
+def test_the_core_and_the_cli_never_import_rclpy():
+    modules = [f'ftplan_ros.core.{m.name}' for m in pkgutil.iter_modules(ftplan_ros.core.__path__)]
+    modules += ['ftplan_ros.cli', 'ftplan_ros.bench', 'ftplan_ros.figures']
+    code = ('import importlib, sys\n'
+            f'for name in {modules!r}:\n'
+            '    importlib.import_module(name)\n'
+            'ros = ("rclpy", "rosidl_runtime_py")\n'
+            'print(sorted(m for m in sys.modules if m.split(".")[0] in ros))\n')
+    run = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         cwd=REPO)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == '[]'
+    assert len(modules) > 12
