@@ -108,14 +108,19 @@ def summarize(runs: list[SceneRun], cells: int) -> str:
     """Tabulate times, ratios and how the answers compare, per group."""
     lines = [f'grid baseline: {cells}^3 cells ({360 / cells:.1f} deg), flood fill in every '
              'failure plane, then a path search',
-             f'{"group":<12}{"scenes":>7}{"planner cold p50/p95 [ms]":>28}'
+             f'{"group":<22}{"scenes":>7}{"planner cold p50/p95 [ms]":>28}'
              f'{"warm p50/p95 [ms]":>20}{"grid p50/p95 [ms]":>20}{"grid/warm":>11}'
              f'{"grid/cold":>11}']
-    for group in sorted({r.group for r in runs}):
-        rows = [r for r in runs if r.group == group]
+    groups = sorted({r.group for r in runs})
+    selections = [(g, [r for r in runs if r.group == g]) for g in groups]
+    selections += [(f'{g}, feasible', [r for r in runs if r.group == g and r.planner_feasible])
+                   for g in groups]
+    for name, rows in selections:
+        if not rows:
+            continue
         cold, warm, grid = (np.array([getattr(r, a) for r in rows]) * 1e3
                             for a in ('planner_cold_s', 'planner_warm_s', 'grid_s'))
-        lines.append(f'{group:<12}{len(rows):>7}{_p(cold):>28}{_p(warm):>20}{_p(grid):>20}'
+        lines.append(f'{name:<22}{len(rows):>7}{_p(cold):>28}{_p(warm):>20}{_p(grid):>20}'
                      f'{np.median(grid) / np.median(warm):>10.0f}x'
                      f'{np.median(grid) / np.median(cold):>10.0f}x')
     agree = sum(r.planner_feasible == r.grid_feasible for r in runs)

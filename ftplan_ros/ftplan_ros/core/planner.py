@@ -1,12 +1,13 @@
 """The planner: the paper's Steps 1-6, then the self-check, then the choice of θ_s.
 
-Candidates θ_s are the obstacle-free points of M_s (thinned). Those passing the necessary
-condition (eq. 6) on one free arc of M_g get a failure surface over the smallest windows
-of that arc holding a hit of every joint. Every such surface is built coarsely and
-scored by the smallest clearance at its vertices; the best-scored is built at full
-resolution and verified, then the next, until one passes. That criterion (recorded in
-the result's stats) prefers the start whose whole recovery region stays farthest from
-obstacles over the first start found.
+Candidates θ_s are the obstacle-free points of M_s, one per continuation step (the
+manifold's `step_max` sets their spacing). Those passing the necessary condition (eq. 6)
+on one free arc of M_g get a failure surface over the smallest windows of that arc that
+hold a hit of every joint. Every such surface is built coarsely and scored by the
+smallest clearance at its vertices; the best-scored is built at full resolution and
+verified, then the next, until one passes. That criterion (recorded in the result's
+stats) prefers the start whose whole recovery region stays farthest from obstacles over
+the first start found.
 """
 
 from __future__ import annotations
@@ -57,7 +58,6 @@ class PlannerOptions:
 
     manifold: ManifoldOptions = field(default_factory=ManifoldOptions)
     verification: VerificationOptions = field(default_factory=VerificationOptions)
-    candidate_spacing: float = 0.02   # between θ_s candidates along M_s^F
     column_spacing: float = 0.06      # between the goal points of a web
     waypoint_spacing: float = 0.04    # between the waypoints of a web path, per joint
     coarse_waypoints: int = 8         # waypoints of each path of the ranking fans
@@ -139,7 +139,7 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
         if not branches:
             raise InputError(name, 'no configuration reaches it (inverse kinematics failed)')
     if start_configuration is None:
-        candidates = _start_candidates(M_s, margin, options.candidate_spacing, robot.periodic)
+        candidates = _start_candidates(M_s, margin, robot.periodic)
     else:
         candidates = _given_start(robot, x_s, start_configuration, checker, margin)
     arcs = goal_free_arcs(M_g, margin)
@@ -212,19 +212,10 @@ def _given_start(robot, x_s: np.ndarray, theta: np.ndarray, checker: CollisionCh
 
 
 def _start_candidates(branches: tuple[SelfMotionManifold, ...], margin: float,
-                      spacing: float, periodic: np.ndarray) -> np.ndarray:
-    """Obstacle-free points of M_s (c, n) [rad], wrapped, about `spacing` apart."""
-    chosen = []
-    for branch in branches:
-        free = branch.free(margin)
-        last = None
-        for theta, ok in zip(branch.points, free, strict=True):
-            if ok and (last is None or np.max(np.abs(theta - last)) >= spacing):
-                chosen.append(theta)
-                last = theta
-    if not chosen:
-        return np.empty((0, len(periodic)))
-    return wrap_configuration(np.array(chosen), periodic)
+                      periodic: np.ndarray) -> np.ndarray:
+    """The obstacle-free points of M_s (c, n) [rad], wrapped: one per continuation step."""
+    free = [branch.points[branch.free(margin)] for branch in branches]
+    return wrap_configuration(np.vstack(free), periodic)
 
 
 @dataclass(frozen=True)
