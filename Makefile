@@ -35,10 +35,15 @@ $(STAMP): requirements.txt constraints.txt $(PACKAGE_FILES)
 demo-core: $(STAMP)
 	@mkdir -p $(OUT)
 	$(BIN)/ftplan plan config/scenes/fig3a.yaml --json $(OUT)/fig3a_plan.json --png $(OUT)/fig3a_plan.png
-	$(BIN)/ftplan drill config/scenes/fig3a.yaml --trials 200 --seed 1
+	$(BIN)/ftplan drill config/scenes/fig3a.yaml --trials 200 --seed 1 --png $(OUT)/fig3a_drill.png
 	$(BIN)/ftplan figure config/scenes/fig3a.yaml --out $(OUT)
 
+# Then the same through ROS 2: planner, executor, sim and injector nodes in one process,
+# joint2 locked at 40% of the nominal path; writes the executed motion as a PNG.
 demo: demo-core
+	ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST} \
+		$(BIN)/ftplan-bringup --scene config/scenes/fig3a.yaml --drill joint2@0.4 \
+		--png $(OUT)/demo_motion.png
 
 test: $(STAMP)
 	$(BIN)/python -m pytest $(PYTEST_ARGS)

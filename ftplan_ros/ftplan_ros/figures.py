@@ -167,7 +167,7 @@ def save_figure(figure: Figure, path: str | Path, dpi: int = DPI) -> Path:
     if path.suffix.lower() != '.png':
         raise ValueError(f'save_figure writes PNG files: give a path ending in .png, not {path}')
     path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=dpi, format='png')
+    figure.savefig(path, dpi=dpi, format='png', bbox_inches='tight')  # keep outside legends
     return path
 
 

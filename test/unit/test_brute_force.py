@@ -3,7 +3,7 @@
 from collections import deque
 
 import numpy as np
-from conftest import paper_scene
+from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.brute_force import JointGrid, grid_plan, label_periodic

@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 import pytest
-from conftest import SCENES
+from ftplan_testing import SCENES
 
 
 def ftplan(*args, cwd=None):

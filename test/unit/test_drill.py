@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from conftest import SCENES
+from ftplan_testing import SCENES
 
 from ftplan_ros.core import load_scene, plan
 from ftplan_ros.core.drill import drilled_motion, run_drill, summarize_drill

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import SCENES
+from ftplan_testing import SCENES
 
 from ftplan_ros.core import load_scene, plan
 from ftplan_ros.core.angles import configuration_difference, wrap_angle
@@ -148,3 +148,14 @@ def test_table_one_start_is_in_our_theta_S(name):
         assert free_hits, f'H_{joint + 1} misses M_g^F'
     # It is even a failure-tolerant start with a verified surface.
     assert plan(scene, start_configuration=theta_s).feasible
+
+
+def test_a_loop_free_all_round_comes_as_two_laps(goal_branches):
+    from ftplan_ros.core.collision import CollisionChecker
+    from ftplan_ros.core.failure_planes import goal_free_arcs
+    free = [mark_obstacle_free(b, CollisionChecker(ARM, [])) for b in goal_branches]
+    for arc in goal_free_arcs(free, 0.0):
+        branch = free[arc.branch]
+        assert arc.count == 2 * len(branch) and arc.lap == len(branch)
+        points = branch.arc_points(arc.first, arc.count)
+        assert np.allclose(points[arc.lap:], points[:arc.lap] + branch.period)

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import SCENES, paper_scene
+from ftplan_testing import SCENES, paper_scene
 
 from ftplan_ros.core import CollisionChecker, InputError, load_scene, plan, recover
 from ftplan_ros.core.paths import densify

@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 import yaml
-from conftest import SCENES
+from ftplan_testing import SCENES
 
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.scene import load_scene, parse_scene, scene_to_dict

@@ -4,7 +4,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from conftest import paper_scene
+from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker, plan
 from ftplan_ros.core.robot import PlanarChain

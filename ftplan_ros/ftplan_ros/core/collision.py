@@ -22,7 +22,11 @@ _FCL_PADDED_RADIUS = 1e-2  # [m] thinnest link capsule handed to fcl
 
 
 class CollisionChecker:
-    """Signed clearance [m] of each link capsule: negative when it penetrates an obstacle."""
+    """Clearance [m] of each link capsule: how far it is from the nearest obstacle.
+
+    A touching or penetrating link gets a clearance <= 0 (the numpy backend: minus the
+    depth; the fcl backend: 0, also for links within 1 cm of an obstacle).
+    """
 
     def __init__(self, robot: Robot, obstacles: Sequence[Obstacle], backend: str = 'auto'):
         """Build the obstacle objects; `backend` is 'auto', 'numpy' (spheres only) or 'fcl'."""
@@ -42,7 +46,7 @@ class CollisionChecker:
         self._fcl_scene: _FclScene | None = None
 
     def clearance(self, thetas: np.ndarray) -> np.ndarray:
-        """Return per-link signed clearance (N, L) [m] of configurations (N, n) [rad]."""
+        """Return per-link clearance (N, L) [m] of configurations (N, n) [rad]."""
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         self.checks += len(thetas)
         n_links = self.robot.link_segments(thetas[:1]).shape[-3]
@@ -118,19 +122,19 @@ class _FclScene:
 def certified_distance(link: fcl.CollisionObject, start: np.ndarray, end: np.ndarray,
                        radius: float, obstacle: Obstacle, fcl_obstacle: fcl.CollisionObject,
                        padding: float) -> float:
-    """Bound [m] from below the distance between a capsule and an obstacle; <= 0 on contact.
+    """Bound [m] from below the distance between a capsule and an obstacle; 0 on contact.
 
     `link` is the fcl capsule around the segment start-end (3,) [m], `padding` [m] thicker
-    than the true `radius`.
+    than the true `radius`. When the padded capsule touches the obstacle the answer is 0:
+    the true clearance is then at most `padding`, and any penetration depth is unknown
+    (fcl's signed-distance query never returns for concentric shapes and takes 0.2 s for a
+    cylinder, and no caller needs the depth: clearance <= 0 means not free).
     """
     request = fcl.DistanceRequest(enable_nearest_points=True,
                                   gjk_solver_type=fcl.GJKSolverType.GST_INDEP)
     result = fcl.DistanceResult()
-    distance = fcl.distance(link, fcl_obstacle, request, result)
-    if distance <= 0.0:  # the padded capsule touches: report the depth, at most zero
-        depth = fcl.distance(link, fcl_obstacle, fcl.DistanceRequest(enable_signed_distance=True),
-                             fcl.DistanceResult())
-        return min(depth + padding, 0.0)
+    if fcl.distance(link, fcl_obstacle, request, result) <= 0.0:
+        return 0.0
     near_link, near_obstacle = (np.asarray(p, dtype=float) for p in result.nearest_points)
     direction = near_obstacle - near_link
     norm = float(np.linalg.norm(direction))
@@ -155,7 +159,7 @@ def _nearest_support(obstacle: Obstacle, direction: np.ndarray) -> float:
 
 
 def point_clearance(obstacles: Sequence[Obstacle], point: np.ndarray) -> np.ndarray:
-    """Signed distance (P,) [m] from a point (3,) to each obstacle (a lower bound); <= 0 inside."""
+    """Distance (P,) [m] from a point (3,) to each obstacle (a lower bound); 0 within 1 cm."""
     point = np.asarray(point, dtype=float)
     probe = fcl.CollisionObject(fcl.Capsule(_FCL_PADDED_RADIUS, 1e-6), fcl.Transform(point))
     return np.array([certified_distance(probe, point, point, 0.0, ob, _fcl_obstacle(ob),

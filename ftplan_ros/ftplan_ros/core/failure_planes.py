@@ -21,11 +21,16 @@ from .robot import Robot
 
 @dataclass(frozen=True)
 class FreeArc:
-    """A run of obstacle-free points of a goal branch: `count` points from index `first`."""
+    """A run of obstacle-free points of a goal branch: `count` points from index `first`.
+
+    A window of the arc must start within its first `lap` points (less than `count` only
+    for a free loop given as two laps, whose windows past one lap repeat).
+    """
 
     branch: int
     first: int
     count: int
+    lap: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,10 +48,19 @@ class FailurePlaneHit:
 
 def goal_free_arcs(goal_branches: tuple[SelfMotionManifold, ...], margin: float,
                    ) -> list[FreeArc]:
-    """Every maximal obstacle-free run of every goal branch (M_g^F in pieces)."""
-    return [FreeArc(b, first, count)
-            for b, branch in enumerate(goal_branches)
-            for first, count in branch.free_arcs(margin) if count >= 2]
+    """Every maximal obstacle-free run of every goal branch (M_g^F in pieces).
+
+    A closed branch free all round has no ends: it comes as two laps from wherever its
+    tracing began, so that a window of hits may straddle that arbitrary point.
+    """
+    arcs = []
+    for b, branch in enumerate(goal_branches):
+        for first, count in branch.free_arcs(margin):
+            if branch.closed and count == len(branch):
+                arcs.append(FreeArc(b, first, 2 * count, count))
+            elif count >= 2:
+                arcs.append(FreeArc(b, first, count, count))
+    return arcs
 
 
 def crossing_segments(values: np.ndarray, levels: np.ndarray, periodic: bool) -> np.ndarray:

@@ -41,6 +41,7 @@ from .manifolds import (
     ManifoldOptions,
     SelfMotionManifold,
     mark_obstacle_free,
+    project_many,
     project_to_preimage,
 )
 from .result import PlanResult
@@ -61,8 +62,8 @@ class PlannerOptions:
     column_spacing: float = 0.06      # between the goal points of a web
     waypoint_spacing: float = 0.04    # between the waypoints of a web path, per joint
     coarse_waypoints: int = 8         # waypoints of each path of the ranking fans
-    windows_per_candidate: int = 2    # hit windows tried for each θ_s and arc
     max_verifications: int = 40       # surfaces verified at most
+    candidate_refinement: int = 4     # start candidates per manifold step on the retry
 
 
 def check_plannable(scene: Scene) -> None:
@@ -114,18 +115,6 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
     x_s, x_g = np.asarray(task.start), np.asarray(task.goal)
     checker = CollisionChecker(robot, scene.obstacles)
     margin = options.verification.margin
-    stats: dict = {'criterion': CRITERION}
-
-    def finish(surface: FailureSurface | None, reason: str = '', **extra) -> PlanResult:
-        stats.update(extra)
-        stats['collision_checks'] = checker.checks
-        stats['plan_time_s'] = time.perf_counter() - started
-        log.info('plan %s in %.3f s%s', 'found' if surface is not None else 'not found',
-                 stats['plan_time_s'], f': {reason}' if reason else '')
-        proposed = None if proposals is None else candidates[
-            sorted({proposal.candidate for proposal in proposals})]
-        return PlanResult(surface is not None, robot.joint_names, reason, surface, stats,
-                          M_s, M_g, theta_S, proposed, robot.periodic)
 
     # Steps 1-2: self-motion manifolds and their obstacle-free parts.
     report('tracing self-motion manifolds')
@@ -134,43 +123,84 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
                 for b in cache.trace(robot, x_s, rng, options.manifold))
     M_g = tuple(mark_obstacle_free(b, checker)
                 for b in cache.trace(robot, x_g, rng, options.manifold))
-    theta_S = proposals = None
     for name, branches in (('task.start', M_s), ('task.goal', M_g)):
         if not branches:
             raise InputError(name, 'no configuration reaches it (inverse kinematics failed)')
-    if start_configuration is None:
-        candidates = _start_candidates(M_s, margin, robot.periodic)
-    else:
-        candidates = _given_start(robot, x_s, start_configuration, checker, margin)
     arcs = goal_free_arcs(M_g, margin)
-    stats.update(start_branches=len(M_s), goal_branches=len(M_g),
-                 start_candidates=len(candidates), goal_free_arcs=len(arcs))
+    stats: dict = {'criterion': CRITERION, 'start_branches': len(M_s),
+                   'goal_branches': len(M_g), 'goal_free_arcs': len(arcs)}
+    arc_points = [M_g[arc.branch].arc_points(arc.first, arc.count) for arc in arcs]
+    arc_laps = [arc.lap for arc in arcs]
+
+    # Steps 3-6 and the self-check, over candidates one step apart along M_s and, when
+    # that finds nothing, over candidates between them (a narrow band of good starts).
+    if start_configuration is not None:
+        refinements = [None]
+    else:
+        refinements = [1, options.candidate_refinement]
+    for subdivisions in refinements:
+        if subdivisions is None:
+            candidates = _given_start(robot, x_s, start_configuration, checker, margin)
+        else:
+            candidates = _start_candidates(robot, x_s, M_s, subdivisions, checker, margin)
+        search = _search(robot, x_g, task.goal_tolerance, candidates, arc_points, arc_laps,
+                         checker, options, report)
+        stats.update(search.stats, start_candidates=len(candidates),
+                     candidate_subdivisions=subdivisions or 1)
+        if search.surface is not None or not arcs or len(candidates) == 0:
+            break
+        report(f'no plan from {len(candidates)} starts; trying starts between them')
+    stats['collision_checks'] = checker.checks
+    stats['plan_time_s'] = time.perf_counter() - started
+    log.info('plan %s in %.3f s%s', 'found' if search.surface is not None else 'not found',
+             stats['plan_time_s'], f': {search.reason}' if search.reason else '')
+    return PlanResult(search.surface is not None, robot.joint_names, search.reason,
+                      search.surface, stats, M_s, M_g, search.theta_S, search.proposed,
+                      robot.periodic)
+
+
+@dataclass(frozen=True, eq=False)
+class _Search:
+    """The outcome of Steps 3-6 and the self-check over one set of start candidates."""
+
+    surface: FailureSurface | None
+    reason: str
+    stats: dict
+    theta_S: np.ndarray | None = None
+    proposed: np.ndarray | None = None
+
+
+def _search(robot, x_g: np.ndarray, goal_tolerance: float, candidates: np.ndarray,
+            arc_points: list[np.ndarray], arc_laps: list[int], checker: CollisionChecker,
+            options: PlannerOptions, report: Callable[[str], None]) -> _Search:
+    """Run Steps 3-6 and the self-check for candidates (c, n) [rad] on the free arcs of M_g."""
     if len(candidates) == 0:
-        return finish(None, 'every start configuration collides (M_s^F is empty)')
-    if not arcs:
-        return finish(None, 'every goal configuration collides (M_g^F is empty)')
+        return _Search(None, 'every start configuration collides (M_s^F is empty)', {})
+    if not arc_points:
+        return _Search(None, 'every goal configuration collides (M_g^F is empty)', {})
 
     # Step 3: the necessary condition, on M_g^F as a whole (the paper's Θ_s) and per arc.
-    arc_points = [M_g[arc.branch].arc_points(arc.first, arc.count) for arc in arcs]
     per_arc = np.stack([necessary_condition(robot, candidates, points) for points in arc_points])
     theta_S = candidates[per_arc.any(axis=0).all(axis=1)]
     single_arc = per_arc.all(axis=2)  # (arcs, C)
-    stats['theta_S'] = len(theta_S)
+    stats = {'theta_S': len(theta_S)}
     if len(theta_S) == 0:
-        return finish(None, 'no candidate θ_s passes the necessary condition: some failure '
-                      'plane misses M_g^F')
+        return _Search(None, 'no candidate θ_s passes the necessary condition: some failure '
+                       'plane misses M_g^F', stats, theta_S)
     if not single_arc.any():
-        return finish(None, 'the failure planes of every θ_s meet M_g^F only on different '
-                      'obstacle-free arcs: no failure surface can join them')
+        return _Search(None, 'the failure planes of every θ_s meet M_g^F only on different '
+                       'obstacle-free arcs: no failure surface can join them', stats, theta_S)
 
     # Steps 4-6: failure surfaces, ranked by the clearance at their vertices.
     report(f'{len(theta_S)} start configurations pass the necessary condition; '
            'building failure surfaces')
-    proposals = _rank_proposals(robot, candidates, arc_points, single_arc, checker, options)
+    proposals = _rank_proposals(robot, candidates, arc_points, arc_laps, single_arc, checker,
+                                options)
+    proposed = candidates[sorted({p.candidate for p in proposals})]
     stats['surfaces_proposed'] = len(proposals)
     if not proposals:
-        return finish(None, 'no failure surface: every surface proposed hits an obstacle '
-                      'at one of its vertices')
+        return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
+                       'at one of its vertices', stats, theta_S, proposed)
 
     # Self-check, best-ranked first: the first surface that passes wins.
     last_reason = 'every fine web hits an obstacle at a vertex'
@@ -181,19 +211,20 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
         if surface is None:
             continue
         tried += 1
-        verdict = verify_surface(surface, checker, x_g, task.goal_tolerance,
-                                 options.verification)
+        verdict = verify_surface(surface, checker, x_g, goal_tolerance, options.verification)
         if verdict.ok:
             report(f'verified the failure surface of start {tried} in the ranking')
-            return finish(surface, surfaces_tried=tried, criterion_value_m=proposal.score,
-                          min_clearance_m=verdict.min_clearance,
-                          recovery_min_clearance_m=verdict.recovery_min_clearance,
-                          goal_error_bound_m=verdict.max_goal_error,
-                          clearance_samples=verdict.clearance_samples)
+            stats.update(surfaces_tried=tried, criterion_value_m=proposal.score,
+                         min_clearance_m=verdict.min_clearance,
+                         recovery_min_clearance_m=verdict.recovery_min_clearance,
+                         goal_error_bound_m=verdict.max_goal_error,
+                         clearance_samples=verdict.clearance_samples)
+            return _Search(surface, '', stats, theta_S, proposed)
         last_reason = verdict.reason
         log.debug('surface rejected: %s', verdict.reason)
-    return finish(None, f'check failed for all {tried} failure surfaces tried; the last: '
-                  f'{last_reason}', surfaces_tried=tried)
+    stats['surfaces_tried'] = tried
+    return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
+                   f'{last_reason}', stats, theta_S, proposed)
 
 
 def _given_start(robot, x_s: np.ndarray, theta: np.ndarray, checker: CollisionChecker,
@@ -211,11 +242,28 @@ def _given_start(robot, x_s: np.ndarray, theta: np.ndarray, checker: CollisionCh
     return on_manifold
 
 
-def _start_candidates(branches: tuple[SelfMotionManifold, ...], margin: float,
-                      periodic: np.ndarray) -> np.ndarray:
-    """The obstacle-free points of M_s (c, n) [rad], wrapped: one per continuation step."""
-    free = [branch.points[branch.free(margin)] for branch in branches]
-    return wrap_configuration(np.vstack(free), periodic)
+def _start_candidates(robot, x_s: np.ndarray, branches: tuple[SelfMotionManifold, ...],
+                      subdivisions: int, checker: CollisionChecker, margin: float,
+                      ) -> np.ndarray:
+    """Obstacle-free configurations (c, n) [rad] of M_s, wrapped, `subdivisions` per step.
+
+    With one subdivision these are the traced points; with more, points between them
+    are interpolated and moved back onto M_s by Newton.
+    """
+    points = []
+    for branch in branches:
+        if subdivisions == 1:
+            points.append(branch.points[branch.free(margin)])
+            continue
+        ends = np.vstack([branch.points, branch.points[:1] + branch.period]) \
+            if branch.closed else branch.points
+        t = np.arange(subdivisions)[None, :, None] / subdivisions
+        between = (ends[:-1, None] + t * (ends[1:, None] - ends[:-1, None])).reshape(
+            -1, ends.shape[1])
+        solved, converged = project_many(robot, x_s, between)
+        solved = solved[converged]
+        points.append(solved[checker.min_clearance(solved) > margin])
+    return wrap_configuration(np.vstack(points), robot.periodic)
 
 
 @dataclass(frozen=True)
@@ -229,8 +277,8 @@ class _Proposal:
 
 
 def _rank_proposals(robot, candidates: np.ndarray, arc_points: list[np.ndarray],
-                    single_arc: np.ndarray, checker: CollisionChecker, options: PlannerOptions,
-                    ) -> list[_Proposal]:
+                    arc_laps: list[int], single_arc: np.ndarray, checker: CollisionChecker,
+                    options: PlannerOptions) -> list[_Proposal]:
     """Score a coarse failure surface for each (θ_s, arc) passing eq. 6; best first.
 
     A coarse surface is the fan of straight paths from θ_s to its chord crossings (one per
@@ -247,7 +295,7 @@ def _rank_proposals(robot, candidates: np.ndarray, arc_points: list[np.ndarray],
             for slot, position, theta in zip(which, positions, thetas, strict=True):
                 hits[slot][i].append(FailurePlaneHit(i, theta, float(position)))
         for slot, c in enumerate(members):
-            for window in smallest_windows(hits[slot])[:options.windows_per_candidate]:
+            for window in (w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]):
                 fans.append(_coarse_fan(candidates[c], points, choose_hits(hits[slot], window),
                                         window, robot.periodic, options.coarse_waypoints))
                 proposals.append((int(c), a, window))

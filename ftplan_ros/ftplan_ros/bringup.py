@@ -1,0 +1,360 @@
+"""`ftplan-bringup`: the whole node suite in one process, planning and drilling a scene.
+
+    ftplan-bringup --scene config/scenes/fig3a.yaml --drill joint2@0.4
+    ftplan-bringup --scene config/scenes/fig3a.yaml --trials 20 --seed 1 --png out/motion.png
+
+The planner, executor, sim and injector nodes run on one MultiThreadedExecutor in a
+background thread (no launch system needed); a small director, a PlanClient, plans the
+scene's task and then, for each run, resets the sim, executes the plan and lets the
+injector lock a joint: first one run per `--drill JOINT@FRACTION` (or JOINT@SECONDSs),
+then `--trials N` runs with a random joint at a random moment (seed `--seed`); with
+neither, one run without a failure. It prints a summary (plan time, the joint and moment
+of each failure, recovery time, goal error, minimum clearance) and exits 0 only when
+every run reached the goal without a collision, 1 otherwise, 2 on bad input and 130 on
+Ctrl-C (after shutting every node down).
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import rclpy
+from rclpy.context import Context
+from rclpy.logging import LoggingSeverity
+from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import JointState
+
+from ftplan_msgs_py import read_joint_state
+
+from .core import InputError, Scene, load_scene
+from .nodes.executor import ExecutorNode
+from .nodes.injector import InjectorNode, parse_drill
+from .nodes.planner import PlannerNode
+from .nodes.sim import SimNode
+from .nodes.spinning import BackgroundSpin
+from .nodes.topics import (
+    EXECUTOR_NODE,
+    INJECTOR_NODE,
+    JOINT_STATES,
+    PLANNER_NODE,
+    SIM_NODE,
+)
+from .plan_client import Outcome, PlanClient, PlannedMotion
+
+SIM_STATUS = f'{SIM_NODE}: arm'
+INJECTOR_STATUS = f'{INJECTOR_NODE}: drills'
+
+
+class Progress:
+    """Progress lines on stderr with the time elapsed."""
+
+    def __init__(self, stream=sys.stderr, quiet: bool = False):
+        self.stream = stream
+        self.quiet = quiet
+        self.started = time.perf_counter()
+
+    def line(self, text: str) -> None:
+        """Print one progress line."""
+        if not self.quiet:
+            print(f'[{time.perf_counter() - self.started:7.2f} s] {text}', file=self.stream,
+                  flush=True)
+
+
+@dataclass(frozen=True)
+class RunReport:
+    """What happened in one run (angles [rad], distances [m], times [s])."""
+
+    run: int
+    drill: str                 # the drill armed for the run ('' for none)
+    ok: bool                   # reached the goal without a collision
+    message: str
+    locked_joint: str = ''
+    lock_progress: float = float('nan')    # fraction of the nominal path when it locked
+    recovery_time: float = float('nan')    # lock event -> goal
+    goal_error: float = float('nan')
+    min_clearance: float = float('nan')
+    collisions: int = 0
+    lock_configuration: np.ndarray | None = None   # (n,) where the arm stopped, locked
+    motion: np.ndarray | None = None               # (k, n) recorded joint states
+
+
+class Suite:
+    """The four nodes on one MultiThreadedExecutor, spinning in a background thread."""
+
+    def __init__(self, scene_file: str, *, speed: float = 2.0, rate: float = 100.0,
+                 drills: Sequence[str] = (), random_drills: int = 0, seed: int = 0,
+                 context: Context | None = None, log_level: LoggingSeverity | None = None):
+        if log_level is not None:
+            for name in (PLANNER_NODE, EXECUTOR_NODE, SIM_NODE, INJECTOR_NODE):
+                rclpy.logging.set_logger_level(name, log_level)
+        common = [Parameter('scene_file', value=str(scene_file))]
+        self.planner = PlannerNode(context=context, parameter_overrides=common + [
+            Parameter('max_joint_speed', value=float(speed))])
+        self.executor_node = ExecutorNode(context=context, parameter_overrides=common + [
+            Parameter('max_joint_speed', value=float(speed))])
+        self.sim = SimNode(context=context, parameter_overrides=common + [
+            Parameter('max_joint_speed', value=2.0 * float(speed)),
+            Parameter('rate', value=float(rate))])
+        injector_parameters = common + [Parameter('random_drills', value=int(random_drills)),
+                                        Parameter('seed', value=int(seed))]
+        if drills:
+            injector_parameters.append(Parameter('drills', value=list(drills)))
+        self.injector = InjectorNode(context=context, parameter_overrides=injector_parameters)
+        self.spin = BackgroundSpin([self.planner, self.executor_node, self.sim, self.injector],
+                                   context=context, name='ftplan-suite')
+
+    def shutdown(self) -> None:
+        """Stop spinning and destroy every node."""
+        self.spin.stop()
+
+
+class Director:
+    """Plan once, then run executions with drills, one after the other, through ROS."""
+
+    def __init__(self, client: PlanClient, scene: Scene, progress: Progress | None = None):
+        self.client = client
+        self.scene = scene
+        self.progress = progress or Progress(quiet=True)
+        self.motion: PlannedMotion | None = None
+        self.recording: list[np.ndarray] = []
+        self._record = False
+        names = list(scene.robot.joint_names)
+        client.create_subscription(JointState, JOINT_STATES,
+                                   lambda msg: self._joint_state(msg, names), 100)
+
+    def _joint_state(self, msg: JointState, names: list[str]) -> None:
+        if self._record:
+            try:
+                self.recording.append(read_joint_state(msg, names))
+            except ValueError:
+                pass
+
+    def plan(self, timeout: float = 60.0) -> PlannedMotion:
+        """Plan the scene's task; a failed plan names the planner's reason."""
+        task = self.scene.task
+        if task is None:
+            raise InputError('task', f'scene {self.scene.name} has no task to plan')
+        if not self.client.wait_until_ready(timeout=10.0):
+            return PlannedMotion(Outcome.UNAVAILABLE, 'the planner or executor did not start')
+        self.progress.line(f'planning {self.scene.name}: {list(task.start)} -> '
+                           f'{list(task.goal)} m')
+        self.motion = self.client.plan(goal=task.goal, start=task.start,
+                                       frame_id=self.scene.frame_id, timeout=timeout)
+        return self.motion
+
+    def run(self, number: int, record: bool = False, timeout: float = 120.0) -> RunReport:
+        """Reset the sim, execute the plan (the injector drills it) and judge the run."""
+        client = self.client
+        ok, message = client.trigger(f'/{SIM_NODE}/reset')
+        if not ok:
+            return RunReport(number, '', False, f'sim reset failed: {message}')
+        resets = message.split(':', 1)[0].split()[-1]
+        client.wait_for_status(SIM_STATUS, lambda v: v.get('resets') == resets, 5.0)
+        self.recording, self._record = [], record
+        mark = client.status_mark
+        try:
+            report = client.execute(self.motion, timeout=timeout)
+        finally:
+            client.spin_until(lambda: False, 0.05)  # the last joint states of the run
+            self._record = False
+        values = report.values
+        arm = client.wait_for_status(
+            SIM_STATUS, lambda v: v.get('resets') == resets and v.get('state') == 'stopped'
+            and v.get('goal_reached') == 'True', 2.0 if report.result is Outcome.SUCCEEDED
+            else 0.0, mark) or client.status(SIM_STATUS)
+        drill = ''
+        for reading in client.statuses(INJECTOR_STATUS, mark):
+            if reading.values.get('execution') == str(report.execution):
+                drill = reading.values.get('drill', drill)
+        sim = arm.values if arm is not None and arm.values.get('resets') == resets else {}
+        collisions = int(sim.get('collisions', '0'))
+        reached = sim.get('goal_reached') == 'True'
+        ok = report.result is Outcome.SUCCEEDED and reached and collisions == 0 and bool(sim)
+        if report.result is not Outcome.SUCCEEDED:
+            why = report.message
+        elif collisions:
+            why = f'{collisions} collision(s)'
+        elif not reached:
+            why = 'the sim did not report the goal reached'
+        else:
+            why = report.message
+        lock = values.get('lock_configuration')
+        return RunReport(
+            number, drill, ok, why, values.get('locked_joint', ''),
+            report.number('lock_progress'), report.number('recovery_time_s'),
+            _number(sim.get('goal_error_m')), _number(sim.get('min_clearance_m')), collisions,
+            np.array(_vector(lock)) if lock else None,
+            np.array(self.recording) if record and self.recording else None)
+
+
+def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) -> str:
+    """Tabulate the plan, then one row per run, then the verdict."""
+    lines = [f'scene {scene.name}: plan {motion.plan_time_s:.3f} s (service round trip '
+             f'{motion.round_trip_s:.3f} s), theta_s = '
+             f'[{", ".join(f"{v:.3f}" for v in motion.theta_s)}] rad, '
+             f'{len(motion.trajectory)} waypoints, S_F of {motion.surface.shape[0]} paths']
+    header = (f'{"run":>4}  {"drill":<16}{"locked":<9}{"at [%]":>7}{"recovery [s]":>14}'
+              f'{"goal err [m]":>14}{"min clear [m]":>15}  result')
+    lines += [header, '-' * len(header)]
+    for r in runs:
+        at = f'{100 * r.lock_progress:.1f}' if np.isfinite(r.lock_progress) else '-'
+        recovery = f'{r.recovery_time:.2f}' if np.isfinite(r.recovery_time) else '-'
+        lines.append(f'{r.run:>4}  {r.drill or "-":<16}{r.locked_joint or "-":<9}{at:>7}'
+                     f'{recovery:>14}{r.goal_error:>14.2e}{r.min_clearance:>15.4f}  '
+                     f'{"reached" if r.ok else "FAILED: " + r.message}')
+    recoveries = np.array([r.recovery_time for r in runs if np.isfinite(r.recovery_time)])
+    if len(recoveries):
+        lines.append(f'recovery time p50 {np.percentile(recoveries, 50):.2f} s, p95 '
+                     f'{np.percentile(recoveries, 95):.2f} s over {len(recoveries)} '
+                     'recoveries')
+    lines.append(f'{sum(r.ok for r in runs)}/{len(runs)} runs reached the goal without '
+                 'collision')
+    return '\n'.join(lines)
+
+
+def pick_run_to_draw(runs: Sequence[RunReport]) -> RunReport | None:
+    """Pick the recorded run to draw: the recovery from a lock nearest mid-path, if any."""
+    recorded = [r for r in runs if r.motion is not None and len(r.motion)]
+    drilled = [r for r in recorded if r.locked_joint and r.lock_configuration is not None]
+    if drilled:
+        return min(drilled, key=lambda r: abs(r.lock_progress - 0.5))
+    return recorded[0] if recorded else None
+
+
+def write_motion_png(scene: Scene, report: RunReport, path: Path) -> Path:
+    """Draw the recorded motion of a run and its moment of failure (figures module)."""
+    from .figures import motion_figure, save_figure
+    motion = report.motion
+    joint = index = None
+    title = f'{scene.name} through ROS: no failure'
+    if report.locked_joint and report.lock_configuration is not None:
+        joint = list(scene.robot.joint_names).index(report.locked_joint)
+        index = int(np.argmin(np.linalg.norm(motion - report.lock_configuration, axis=1)))
+        title = (f'{scene.name} through ROS: {report.locked_joint} locked at '
+                 f'{report.lock_progress:.0%} of the nominal path, recovered')
+    return save_figure(motion_figure(scene, motion, index, joint, title), path)
+
+
+def _vector(text: str) -> list[float]:
+    """Parse '[a, b, c]' (how reports format configurations)."""
+    return [float(v) for v in text.strip('[] ').split(',')]
+
+
+def _number(text: str | None) -> float:
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return float('nan')
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog='ftplan-bringup', description=__doc__.splitlines()[0])
+    parser.add_argument('--scene', type=Path, required=True,
+                        help='scene YAML (robot, obstacles, task)')
+    parser.add_argument('--drill', action='append', default=[], metavar='JOINT@FRACTION',
+                        help='one run locking JOINT at FRACTION (0..1) of the nominal path '
+                        '(or at SECONDSs after the start); repeatable')
+    parser.add_argument('--trials', type=int, default=0,
+                        help='runs with a random joint locked at a random moment (0)')
+    parser.add_argument('--seed', type=int, default=0, help='seed of the random drills (0)')
+    parser.add_argument('--png', type=Path,
+                        help='draw the executed motion of a drilled run (the one locked '
+                        'nearest mid-path) here')
+    parser.add_argument('--speed', type=float, default=2.0,
+                        help='fastest commanded joint speed [rad/s] (2.0)')
+    parser.add_argument('--rate', type=float, default=100.0,
+                        help='sim rate [Hz] of /joint_states (100)')
+    parser.add_argument('--timeout', type=float, default=120.0,
+                        help='seconds a run may take (120)')
+    parser.add_argument('-v', '--verbose', action='store_true', help='show the nodes\' logs')
+    parser.add_argument('--ros-args', nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
+    return parser
+
+
+def _check(args: argparse.Namespace) -> Scene:
+    scene = load_scene(args.scene)
+    for text in args.drill:
+        try:
+            parse_drill(text, scene.robot.joint_names)
+        except ValueError as error:
+            raise InputError('--drill', str(error)) from None
+    if args.trials < 0:
+        raise InputError('--trials', f'must be >= 0, got {args.trials}')
+    for name in ('speed', 'rate', 'timeout'):
+        value = getattr(args, name)
+        if not np.isfinite(value) or value <= 0:
+            raise InputError(f'--{name}', f'must be a finite number > 0, got {value}')
+    return scene
+
+
+def _raise_interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the bringup; return the exit code (0: every run reached the goal safely)."""
+    args = _parser().parse_args(argv)
+    try:
+        scene = _check(args)
+    except InputError as error:
+        print(f'ftplan-bringup: error: {error}', file=sys.stderr)
+        return 2
+    progress = Progress()
+    runs_wanted = len(args.drill) + args.trials or 1
+    # Ctrl-C and SIGTERM raise KeyboardInterrupt here, in the director's thread.
+    rclpy.init(args=['--ros-args'] + (args.ros_args or []),
+               signal_handler_options=SignalHandlerOptions.NO)
+    previous_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    suite = client = None
+    try:
+        progress.line('starting the planner, executor, sim and injector nodes')
+        suite = Suite(args.scene.resolve(), speed=args.speed, rate=args.rate,
+                      drills=args.drill, random_drills=args.trials, seed=args.seed,
+                      log_level=None if args.verbose else LoggingSeverity.WARN)
+        client = PlanClient()
+        director = Director(client, scene, progress)
+        motion = director.plan()
+        if not motion.succeeded:
+            print(f'scene {scene.name}: {motion.message}')
+            return 1
+        progress.line(f'plan found in {motion.plan_time_s:.3f} s; {runs_wanted} run(s)')
+        runs: list[RunReport] = []
+        for number in range(1, runs_wanted + 1):
+            report = director.run(number, record=args.png is not None, timeout=args.timeout)
+            runs.append(report)
+            progress.line(f'run {number}/{runs_wanted}: {report.drill or "no drill"} -> '
+                          f'{"reached" if report.ok else "FAILED: " + report.message}')
+        print(summarize(scene, motion, runs))
+        png_run = pick_run_to_draw(runs)
+        if args.png is not None and png_run is not None:
+            try:
+                print(f'wrote {write_motion_png(scene, png_run, args.png)}')
+            except ImportError as error:
+                print(f'ftplan-bringup: cannot draw {args.png}: {error}', file=sys.stderr)
+                return 1
+        return 0 if all(r.ok for r in runs) else 1
+    except KeyboardInterrupt:
+        print('ftplan-bringup: interrupted; shutting the nodes down', file=sys.stderr)
+        return 130
+    except InputError as error:
+        print(f'ftplan-bringup: error: {error}', file=sys.stderr)
+        return 2
+    finally:
+        signal.signal(signal.SIGTERM, previous_term)
+        if client is not None:
+            client.destroy_node()
+        if suite is not None:
+            suite.shutdown()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,290 @@
+"""The injector node: failure drills as locked-joint events on /ftplan/locked_joint.
+
+    ros2 run ftplan_ros injector --ros-args -p drills:="['joint2@0.4', 'joint1@2.5s']"
+    ros2 param set /ftplan_injector lock_now joint3        # one event, right now
+
+Each execution of a plan (the executor's 'execution' status on /diagnostics numbers them)
+gets at most one drill, taken in order from:
+
+- `drills`: scheduled drills, one per execution. 'JOINT@F' locks JOINT once the arm has
+  done the fraction F (0..1) of the nominal path's length, measured by projecting
+  /joint_states onto /ftplan/plan/trajectory; 'JOINT@Ts' locks it T seconds after the
+  execution started (which may fall in the approach to θ_s, where no recovery is
+  guaranteed).
+- `random_drills`: then this many executions (-1: all of them) get a Monte Carlo drill,
+  a uniformly random joint at a uniformly random fraction of the nominal path, drawn
+  from a generator seeded with `seed` (setting either parameter restarts the sequence).
+
+Setting `lock_now` to a joint name publishes one event at once and clears the parameter.
+Every event is logged and reported on /diagnostics ('ftplan_injector: drills').
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
+
+from ftplan_msgs_py import (
+    create_locked_joint,
+    read_diagnostic_status,
+    read_joint_state,
+    read_joint_trajectory,
+)
+
+from .motion import progress_along
+from .params import (
+    add_validators,
+    array_parameter,
+    check_startup_parameters,
+    declare,
+    declare_array,
+    declare_scene,
+)
+from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
+from .reporting import Diagnostics
+from .spinning import run_node
+from .topics import (
+    DIAGNOSTICS,
+    EXECUTOR_NODE,
+    INJECTOR_NODE,
+    JOINT_STATES,
+    LOCKED_JOINT,
+    TRAJECTORY,
+)
+
+_DRILL = re.compile(r'^\s*([^@\s]+)\s*@\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s?)\s*$')
+_RUNNING = ('approaching', 'nominal')
+
+
+@dataclass(frozen=True)
+class Drill:
+    """Lock `joint` at `fraction` (0..1) of the nominal path, or `seconds` after the start."""
+
+    joint: str
+    fraction: float | None = None
+    seconds: float | None = None
+
+    def __str__(self) -> str:
+        return f'{self.joint}@{self.seconds:.3g}s' if self.seconds is not None else \
+            f'{self.joint}@{self.fraction:.3g}'
+
+
+def parse_drill(text: str, joint_names: Sequence[str]) -> Drill:
+    """Parse 'JOINT@FRACTION' (0..1) or 'JOINT@SECONDSs'; ValueError says what is wrong."""
+    match = _DRILL.match(text) if isinstance(text, str) else None
+    if match is None:
+        raise ValueError(f'drill {text!r} is not JOINT@FRACTION (e.g. joint2@0.4) or '
+                         'JOINT@SECONDSs (e.g. joint1@2.5s)')
+    joint, number, seconds = match.group(1), float(match.group(2)), match.group(3)
+    if joint not in joint_names:
+        raise ValueError(f'drill {text!r}: unknown joint {joint!r}; the arm has '
+                         f'{list(joint_names)}')
+    if seconds:
+        return Drill(joint, seconds=number)
+    if not 0.0 <= number <= 1.0:
+        raise ValueError(f'drill {text!r}: the fraction of the path must be in [0, 1]; '
+                         'add "s" for seconds')
+    return Drill(joint, fraction=number)
+
+
+def random_drill(rng: np.random.Generator, joint_names: Sequence[str]) -> Drill:
+    """Draw a Monte Carlo drill: a uniformly random joint at a uniformly random fraction."""
+    joint = joint_names[int(rng.integers(len(joint_names)))]
+    return Drill(joint, fraction=float(rng.uniform(0.0, 1.0)))
+
+
+class InjectorNode(Node):
+    """Publish locked-joint failure events: scheduled, random or manual."""
+
+    def __init__(self, **kwargs):
+        super().__init__(INJECTOR_NODE, **kwargs)
+        self.scene = declare_scene(self)
+        self.names = list(self.scene.robot.joint_names)
+        declare_array(self, 'drills', Parameter.Type.STRING_ARRAY,
+                      'Scheduled drills, one per execution: JOINT@FRACTION of the nominal '
+                      'path (0..1) or JOINT@SECONDSs after the execution starts.')
+        declare(self, 'random_drills', 0,
+                'Executions (after the scheduled ones) that get a random drill; -1: all.')
+        declare(self, 'seed', 0, 'Seed of the random drills.')
+        declare(self, 'lock_now', '',
+                'Set to a joint name to publish one lock event at once (then cleared).')
+        declare(self, 'executor_status', f'{EXECUTOR_NODE}: execution',
+                'Name of the executor\'s execution status on /diagnostics.')
+        validators = {
+            'drills': self._check_drills,
+            'random_drills': lambda v: None if v >= -1 else f'must be >= -1, got {v}',
+            'lock_now': lambda v: None if v in ('', *self.names) else
+            f'unknown joint {v!r}; the arm has {self.names}',
+        }
+        check_startup_parameters(self, validators)
+        add_validators(self, validators)
+        self.add_post_set_parameters_callback(self.parameters_callback)
+
+        self.diagnostics = Diagnostics(self)
+        self.queue = [parse_drill(text, self.names) for text in array_parameter(self, 'drills')]
+        self._restart_random()
+        self.execution: int | None = None
+        self.state = ''
+        self.drill: Drill | None = None
+        self.pending = False
+        self.nominal: np.ndarray | None = None
+        self._drill_timer = None
+        self._clear_timer = None
+
+        self.lock_publisher = self.create_publisher(JointState, LOCKED_JOINT, EVENT_QOS_DEPTH)
+        self.status_subscription = self.create_subscription(
+            DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, EVENT_QOS_DEPTH)
+        self.joint_state_subscription = self.create_subscription(
+            JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
+        self.trajectory_subscription = self.create_subscription(
+            JointTrajectory, TRAJECTORY, self.trajectory_callback, LATCHED_QOS)
+        if self.queue or self.random_left:
+            self.get_logger().info(f'drills: {[str(d) for d in self.queue]}, then '
+                                   f'{self.random_left} random (seed {self._seed})')
+
+    # Parameters ---------------------------------------------------------------------
+
+    def _check_drills(self, value) -> str | None:
+        try:
+            for text in value:
+                parse_drill(text, self.names)
+        except ValueError as error:
+            return str(error)
+        return None
+
+    def _restart_random(self) -> None:
+        self._seed = int(self.get_parameter('seed').value)
+        self.rng = np.random.default_rng(self._seed)
+        self.random_left = int(self.get_parameter('random_drills').value)
+
+    def parameters_callback(self, parameters: list[Parameter]) -> None:
+        """Apply accepted changes: new schedule, new random sequence, manual lock."""
+        names = {p.name for p in parameters}
+        if 'drills' in names:
+            self.queue = [parse_drill(t, self.names) for t in array_parameter(self, 'drills')]
+        if names & {'random_drills', 'seed'}:
+            self._restart_random()
+        lock = self.get_parameter('lock_now').value
+        if 'lock_now' in names and lock:
+            self.publish_lock(lock, 'manual lock_now')
+            # Clear it outside this callback: parameters cannot be set from in here.
+            self._clear_timer = self.create_timer(0.0, self._clear_lock_now)
+
+    def _clear_lock_now(self) -> None:
+        self.destroy_timer(self._clear_timer)
+        self._clear_timer = None
+        self.set_parameters([Parameter('lock_now', value='')])
+
+    # Inputs -------------------------------------------------------------------------
+
+    def trajectory_callback(self, msg: JointTrajectory) -> None:
+        """Keep the nominal path, to measure the progress of an execution."""
+        try:
+            self.nominal = read_joint_trajectory(msg, self.names).positions
+        except ValueError as error:
+            self.diagnostics.rejected('drills', f'ignored trajectory: {error}')
+
+    def diagnostics_callback(self, msg: DiagnosticArray) -> None:
+        """Follow the executor's execution status: arm a drill for each new execution."""
+        name = self.get_parameter('executor_status').value
+        for status in msg.status:
+            if status.name != name:
+                continue
+            try:
+                values = read_diagnostic_status(status).values
+                state = values['state']
+                execution = int(values['execution']) if 'execution' in values else None
+            except (ValueError, KeyError):
+                continue
+            self._follow(execution, state)
+
+    def _follow(self, execution: int | None, state: str) -> None:
+        if execution is not None and execution != self.execution and state in _RUNNING:
+            self.execution = execution
+            self._arm()
+        if execution != self.execution:
+            return
+        previous, self.state = self.state, state
+        if not self.pending or state == previous:
+            return
+        if state == 'nominal' and self.drill.fraction == 0.0:
+            self._fire('at the start of the nominal path')
+        elif state == 'done' and self.drill.fraction is not None:
+            self._fire('after the nominal phase ended')
+        elif state not in _RUNNING:
+            self._disarm(f'execution {execution} became {state} first')
+
+    def _arm(self) -> None:
+        self._disarm()
+        if self.queue:
+            self.drill = self.queue.pop(0)
+        elif self.random_left != 0:
+            self.drill = random_drill(self.rng, self.names)
+            self.random_left -= 1 if self.random_left > 0 else 0
+        else:
+            self.drill = None
+            return
+        self.pending = True
+        self.diagnostics.report('drills', 'OK', f'execution {self.execution}: armed '
+                                f'{self.drill}', {'execution': self.execution,
+                                                  'drill': str(self.drill)}, log=True)
+        if self.drill.seconds is not None:
+            self._drill_started = time.monotonic()
+            self._drill_timer = self.create_timer(self.drill.seconds, self._timed_fire)
+
+    def _disarm(self, why: str = '') -> None:
+        if self._drill_timer is not None:
+            self.destroy_timer(self._drill_timer)
+            self._drill_timer = None
+        if self.pending and why:
+            self.diagnostics.report('drills', 'WARN', f'dropped drill {self.drill}: {why}',
+                                    {'execution': self.execution, 'drill': str(self.drill)},
+                                    log=True)
+        self.pending = False
+
+    def _timed_fire(self) -> None:
+        self.destroy_timer(self._drill_timer)
+        self._drill_timer = None
+        if self.pending and self.state in _RUNNING:
+            self._fire(f'{time.monotonic() - self._drill_started:.2f} s after the start')
+
+    def joint_state_callback(self, msg: JointState) -> None:
+        """Fire a fraction drill once the arm has done its share of the nominal path."""
+        if not self.pending or self.state != 'nominal' or self.drill.fraction is None or \
+                self.nominal is None:
+            return
+        try:
+            q = read_joint_state(msg, self.names)
+        except ValueError:
+            return
+        progress, _ = progress_along(self.nominal, q, self.scene.robot.periodic)
+        if progress >= self.drill.fraction:
+            self._fire(f'at {progress:.1%} of the nominal path')
+
+    # Output -------------------------------------------------------------------------
+
+    def _fire(self, when: str) -> None:
+        self.pending = False
+        self.publish_lock(self.drill.joint, f'execution {self.execution}: drill {self.drill} '
+                          f'{when}', {'execution': self.execution, 'drill': str(self.drill)})
+
+    def publish_lock(self, joint: str, why: str, values: dict | None = None) -> None:
+        """Publish the event that locks `joint` where it is, and report it."""
+        self.lock_publisher.publish(
+            create_locked_joint(joint, stamp=self.get_clock().now().to_msg()))
+        self.diagnostics.report('drills', 'OK', f'locked {joint}: {why}',
+                                {'joint': joint, **(values or {})}, log=True)
+
+
+def main(args=None) -> int:
+    """Run the injector node until Ctrl-C; exit code 2 for a bad scene or parameter."""
+    return run_node(InjectorNode, INJECTOR_NODE, args)

@@ -1,0 +1,87 @@
+"""Joint-path helpers of the nodes: timing, progress along a path, approach moves.
+
+Paths are (k, n) [rad], lifted (continuous); joints flagged periodic wrap every 2π.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ftplan_ros.core import CollisionChecker
+from ftplan_ros.core.paths import densify
+
+MIN_STEP_TIME = 1e-3  # [s] keeps the times of a trajectory strictly increasing
+
+
+def wrap(angles: np.ndarray) -> np.ndarray:
+    """Wrap angles [rad] to (-π, π]."""
+    return np.pi - np.mod(np.pi - np.asarray(angles, dtype=float), 2.0 * np.pi)
+
+
+def time_path(path: np.ndarray, max_speed: float, min_step: float = MIN_STEP_TIME,
+              ) -> np.ndarray:
+    """Return times (k,) [s] from 0 that move no joint faster than `max_speed` [rad/s].
+
+    Each step takes max_j |Δθ_j| / max_speed, and at least `min_step` so the times are
+    strictly increasing (a ros2_control joint_trajectory_controller requires it).
+    """
+    steps = np.max(np.abs(np.diff(path, axis=0)), axis=1) / max_speed if len(path) > 1 \
+        else np.zeros(0)
+    return np.concatenate([[0.0], np.cumsum(np.maximum(steps, min_step))])
+
+
+def differences(q: np.ndarray, points: np.ndarray, periodic: np.ndarray | None) -> np.ndarray:
+    """Return q - points (..., n) [rad], wrapped to (-π, π] on the periodic joints."""
+    delta = np.asarray(q, dtype=float) - points
+    if periodic is not None and np.any(periodic):
+        delta = np.where(periodic, wrap(delta), delta)
+    return delta
+
+
+def progress_along(path: np.ndarray, q: np.ndarray, periodic: np.ndarray | None = None,
+                   ) -> tuple[float, float]:
+    """Project q (n,) onto the polyline `path` (k, n): (fraction of its length, distance [rad]).
+
+    With `periodic`, q may differ from the path by whole turns of those joints.
+    """
+    if len(path) < 2:
+        return 1.0, float(np.linalg.norm(differences(q, path[-1], periodic)))
+    a, b = path[:-1], path[1:]
+    direction = b - a
+    lengths2 = np.einsum('sn,sn->s', direction, direction)
+    offset = differences(q, a, periodic)
+    t = np.clip(np.einsum('sn,sn->s', offset, direction) / np.maximum(lengths2, 1e-300), 0, 1)
+    gaps = np.linalg.norm(offset - t[:, None] * direction, axis=1)
+    best = int(np.argmin(gaps))
+    lengths = np.sqrt(lengths2)
+    total = float(lengths.sum())
+    if total == 0.0:
+        return 1.0, float(gaps[best])
+    return float((lengths[:best].sum() + t[best] * lengths[best]) / total), float(gaps[best])
+
+
+def straight_moves(q: np.ndarray, target: np.ndarray, periodic: np.ndarray) -> list[np.ndarray]:
+    """Straight joint moves (2, n) from q to target, shortest first.
+
+    A periodic joint may reach its target turning either way: each choice ends at the
+    target plus whole turns, so the last point of a move may differ from `target` by 2π.
+    """
+    q = np.asarray(q, dtype=float)
+    nearest = q + differences(target, q, periodic)
+    options = []
+    for j in range(len(q)):
+        if periodic[j] and nearest[j] != q[j]:
+            other = nearest[j] - np.sign(nearest[j] - q[j]) * 2.0 * np.pi
+            options.append((nearest[j], other))
+        else:
+            options.append((nearest[j],))
+    ends = [np.array(choice) for choice in itertools.product(*options)]
+    ends.sort(key=lambda end: float(np.linalg.norm(end - q)))
+    return [np.vstack([q, end]) for end in ends]
+
+
+def path_clearance(checker: CollisionChecker, path: np.ndarray, max_step: float) -> float:
+    """Smallest clearance [m] along `path`, sampled at most `max_step` [rad] apart."""
+    return float(checker.min_clearance(densify(path, max_step)).min())

@@ -1,0 +1,85 @@
+"""Obstacles from /ftplan/obstacles as core obstacles, added to the scene's static ones.
+
+Marker shapes map onto the core's: a SPHERE of scale (d, d, d) is a sphere of radius d/2
+(an ellipsoid is bounded by the sphere of its largest diameter), a CUBE is a box of
+edges `scale`, and a CYLINDER (axis along its local z) has radius max(sx, sy)/2 and
+length sz. Orientations become roll, pitch, yaw [rad].
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+from visualization_msgs.msg import MarkerArray
+
+from ftplan_msgs_py import ObstacleKey, ObstacleShape, read_obstacle_markers
+from ftplan_ros.core import Obstacle, Scene
+
+
+def rpy_from_quaternion(q: np.ndarray) -> tuple[float, float, float]:
+    """Return roll, pitch, yaw [rad] (R = Rz Ry Rx) of the unit quaternion (x, y, z, w)."""
+    x, y, z, w = (float(v) for v in q)
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
+def quaternion_from_rpy(rpy) -> np.ndarray:
+    """Return the unit quaternion (x, y, z, w) of roll, pitch, yaw [rad] (R = Rz Ry Rx)."""
+    roll, pitch, yaw = (0.5 * float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch),
+                              math.sin(pitch), math.cos(yaw), math.sin(yaw))
+    return np.array([sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
+                     cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy])
+
+
+def obstacle_from_shape(shape: ObstacleShape) -> Obstacle:
+    """Return the core obstacle of a marker shape (scale and centre in metres)."""
+    center = tuple(float(v) for v in shape.center)
+    sx, sy, sz = (float(v) for v in shape.scale)
+    rpy = rpy_from_quaternion(shape.orientation)
+    if shape.shape == 'sphere':
+        return Obstacle('sphere', center, radius=0.5 * max(sx, sy, sz))
+    if shape.shape == 'box':
+        return Obstacle('box', center, size=(sx, sy, sz), rpy=rpy)
+    return Obstacle('cylinder', center, radius=0.5 * max(sx, sy), length=sz, rpy=rpy)
+
+
+def shape_from_obstacle(key: ObstacleKey, obstacle: Obstacle) -> ObstacleShape:
+    """Return the marker shape of a core obstacle, keyed `key` (ns, id)."""
+    if obstacle.shape == 'sphere':
+        scale = np.full(3, 2.0 * obstacle.radius)
+    elif obstacle.shape == 'box':
+        scale = np.array(obstacle.size, dtype=float)
+    else:
+        scale = np.array([2.0 * obstacle.radius, 2.0 * obstacle.radius, obstacle.length])
+    return ObstacleShape(key, obstacle.shape, np.array(obstacle.center, dtype=float), scale,
+                         quaternion_from_rpy(obstacle.rpy))
+
+
+class ObstacleSet:
+    """The obstacles received on /ftplan/obstacles, keyed (ns, id) as RViz keys markers."""
+
+    def __init__(self, frame_id: str):
+        self.frame_id = frame_id
+        self.shapes: Mapping[ObstacleKey, ObstacleShape] = {}
+        self.obstacles: tuple[Obstacle, ...] = ()
+
+    def update(self, msg: MarkerArray) -> None:
+        """Apply a MarkerArray (ADD, DELETE, DELETEALL); all or nothing.
+
+        :raises ValueError: on a malformed marker; the set is then left as it was.
+        """
+        shapes = read_obstacle_markers(msg, self.frame_id, self.shapes)
+        obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
+        self.shapes, self.obstacles = shapes, obstacles
+
+    def scene(self, base: Scene) -> Scene:
+        """Return `base` with these obstacles added to its static ones."""
+        return base.with_obstacles(self.obstacles) if self.obstacles else base
+
+    def __len__(self) -> int:
+        return len(self.obstacles)

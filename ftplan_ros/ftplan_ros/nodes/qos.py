@@ -1,0 +1,18 @@
+"""The one latched QoS profile of ftplan (like nav2's map_server map topic).
+
+Obstacles and plan results keep their last message for subscribers that join late:
+`KEEP_LAST` depth 1, `RELIABLE`, `TRANSIENT_LOCAL`. Publishers and subscribers of those
+topics must both use it.
+"""
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+LATCHED_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    reliability=ReliabilityPolicy.RELIABLE,
+)
+
+# Events and commands: reliable, volatile, a short queue.
+EVENT_QOS_DEPTH = 10

@@ -1,0 +1,129 @@
+"""Executor helpers: a MultiThreadedExecutor without rclpy 7's busy loops, and a clean stop.
+
+Two busy loops of rclpy 7 (Jazzy) with Fast DDS make a MultiThreadedExecutor spin at
+full speed while holding the GIL, so that a node with a 100 Hz timer next to a few
+subscriptions drops, at random, to a few callbacks per second:
+
+- The QoS event handlers that rclpy attaches to every publisher and subscription (the
+  default "incompatible QoS" and "incompatible type" warnings) wake the wait set over and
+  over with nothing ready once a worker thread runs callbacks beside it. This executor
+  leaves them out of its wait set: those warnings are not delivered (ftplan registers
+  no event callback of its own). Without them it was never seen to spin.
+- rclpy re-yields every handler task that has been handed to the thread pool but has not
+  started yet, so `spin()` loops without waiting while the workers cannot even start
+  (ros2/rclpy#1452, fixed upstream by ros2/rclpy#1547). Our callbacks are plain functions
+  that finish in one go, so their handler tasks never need a second yield: this
+  executor drops them from the re-yield list as it makes them. (Coroutine callbacks,
+  which await, need the re-yield: use rclpy's own executor for those.)
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable, Sequence
+
+import rclpy
+from rclpy.context import Context
+from rclpy.event_handler import EventHandler
+from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.executors import MultiThreadedExecutor as _RclpyMultiThreadedExecutor
+from rclpy.node import Node
+
+from .params import STARTUP_ERRORS
+
+MIN_THREADS = 4
+
+
+class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
+    """rclpy's MultiThreadedExecutor for plain (non-coroutine) callbacks, minus its busy loop.
+
+    It runs at least `MIN_THREADS` threads, so that a slow plan never leaves the other
+    nodes of a process without one.
+    """
+
+    def __init__(self, num_threads: int | None = None, *, context=None):
+        super().__init__(num_threads or max(MIN_THREADS, os.cpu_count() or 1), context=context)
+
+    def can_execute(self, entity) -> bool:
+        """Leave QoS event handlers out of the wait set (the first busy loop above)."""
+        return not isinstance(entity, EventHandler) and super().can_execute(entity)
+
+    def _make_handler(self, entity, node, take_from_wait_list):
+        task = super()._make_handler(entity, node, take_from_wait_list)
+        with self._tasks_lock:
+            self._tasks = [entry for entry in self._tasks if entry[0] is not task]
+        return task
+
+
+def stop_executor(executor: Executor, nodes: Sequence[Node], timeout: float = 5.0) -> None:
+    """Take the nodes off `executor`, let the callbacks in flight finish, shut it down.
+
+    rclpy 7's Executor.shutdown() means to wait for the callbacks in flight but does not
+    (it tests the shutdown flag right after setting it), so a callback that ends after
+    it meets destroyed handles; this waits on the executor's work tracker first.
+    """
+    for node in nodes:
+        executor.remove_node(node)
+    tracker = getattr(executor, '_work_tracker', None)
+    if tracker is not None:
+        tracker.wait(timeout)
+    executor.shutdown(timeout_sec=timeout)
+
+
+
+class BackgroundSpin:
+    """Nodes spinning on our MultiThreadedExecutor in a daemon thread, and a clean stop."""
+
+    def __init__(self, nodes: Sequence[Node] = (), *, context: Context | None = None,
+                 name: str = 'ftplan-spin'):
+        self.executor = MultiThreadedExecutor(context=context)
+        self.nodes: list[Node] = []
+        for node in nodes:
+            self.add(node)
+        self.thread = threading.Thread(target=self._spin, name=name, daemon=True)
+        self.thread.start()
+
+    def add(self, node: Node) -> Node:
+        """Spin `node` too; return it."""
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Stop spinning, let callbacks in flight finish and destroy every node."""
+        stop_executor(self.executor, self.nodes, timeout)
+        self.thread.join(timeout=timeout)
+        for node in self.nodes:
+            node.destroy_node()
+
+    def _spin(self) -> None:
+        try:
+            self.executor.spin()
+        except ExternalShutdownException:
+            pass
+
+
+def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
+    """Init rclpy, build the node and spin it until Ctrl-C (the body of every node's main).
+
+    Returns 0, or 2 when the node cannot start (a bad scene file or parameter), after
+    one fatal log line.
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = make_node()
+        executor = MultiThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except STARTUP_ERRORS as error:
+        rclpy.logging.get_logger(name).fatal(f'cannot start: {error}')
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

@@ -1,0 +1,19 @@
+"""Default names of ftplan's topics and services (CONTRACT.md); remap them with --ros-args."""
+
+JOINT_STATES = '/joint_states'
+OBSTACLES = '/ftplan/obstacles'
+PLAN_SERVICE = '/ftplan/plan'
+START_CONFIGURATION = '/ftplan/plan/start_configuration'
+TRAJECTORY = '/ftplan/plan/trajectory'
+FAILURE_SURFACE = '/ftplan/plan/failure_surface'
+PLAN_MARKERS = '/ftplan/plan/markers'
+LOCKED_JOINT = '/ftplan/locked_joint'
+EXECUTE_SERVICE = '/ftplan/execute'
+JOINT_COMMAND = '/ftplan/joint_command'
+DIAGNOSTICS = '/diagnostics'
+SIM_RESET_SERVICE = '~/reset'
+
+PLANNER_NODE = 'ftplan_planner'
+EXECUTOR_NODE = 'ftplan_executor'
+SIM_NODE = 'ftplan_sim'
+INJECTOR_NODE = 'ftplan_injector'

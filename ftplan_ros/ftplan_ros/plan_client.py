@@ -1,0 +1,357 @@
+"""PlanClient: plan and execute failure-tolerant motions from Python, without futures.
+
+In the spirit of nav2_simple_commander's BasicNavigator: a Node that owns its spinning
+(its own executor, spun only inside its verbs), so a script or a test just calls
+
+    rclpy.init()
+    client = PlanClient()
+    client.wait_until_ready()
+    motion = client.plan(goal=(1.0, 0.0))          # from where the arm is now
+    if motion.result is Outcome.SUCCEEDED:
+        report = client.execute(motion)
+        print(report.result, report.message)
+    client.destroy_node()
+
+`plan` returns θ_s, the nominal trajectory and the failure surface as one PlannedMotion
+(gathered from the service response and the planner's latched topics); when there is
+no plan its message carries the planner's reason from /diagnostics. `execute` calls
+/ftplan/execute and follows the executor's status until the arm is at the goal or the
+execution failed. Never use a PlanClient from inside another node's callback: its verbs
+block while they spin.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Point, Pose, PoseStamped
+from nav_msgs.srv import GetPlan
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray, Header
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from ftplan_msgs_py import (
+    DiagnosticReading,
+    read_diagnostic_status,
+    read_failure_surface,
+    read_joint_trajectory,
+    read_path,
+)
+
+from .nodes.qos import LATCHED_QOS
+from .nodes.reporting import stamp_key
+from .nodes.topics import (
+    DIAGNOSTICS,
+    EXECUTE_SERVICE,
+    EXECUTOR_NODE,
+    FAILURE_SURFACE,
+    PLAN_SERVICE,
+    PLANNER_NODE,
+    START_CONFIGURATION,
+    TRAJECTORY,
+)
+
+_POLL = 0.02  # [s] longest single wait of the client's executor
+_STATUS_LOG_SIZE = 500  # recent /diagnostics statuses kept
+
+
+class Outcome(Enum):
+    """How a verb ended (like nav2's TaskResult)."""
+
+    SUCCEEDED = 'succeeded'
+    FAILED = 'failed'           # the node answered: no plan, or the execution failed
+    TIMED_OUT = 'timed out'     # no (complete) answer within the timeout
+    UNAVAILABLE = 'unavailable'  # the service is not there
+
+
+@dataclass(frozen=True, eq=False)
+class PlannedMotion:
+    """The outcome of a plan request; the arrays are set when `result` is SUCCEEDED.
+
+    Angles [rad], positions [m], times [s].
+    """
+
+    result: Outcome
+    message: str
+    stamp: str = ''                          # the plan's stamp 'sec.nanosec'
+    joint_names: tuple[str, ...] = ()
+    path: np.ndarray | None = None           # (k, 3) end-effector path
+    theta_s: np.ndarray | None = None        # (n,) start configuration
+    trajectory: np.ndarray | None = None     # (k, n) nominal joint path
+    times: np.ndarray | None = None          # (k,) its times from start
+    surface: np.ndarray | None = None        # (K, W, n) failure surface S_F
+    nominal_index: int | None = None         # which path of S_F is the nominal one
+    round_trip_s: float = float('nan')       # request sent -> response received
+    plan_time_s: float = float('nan')        # the core's plan time, from the planner's status
+
+    @property
+    def succeeded(self) -> bool:
+        """Whether there is a failure-tolerant plan."""
+        return self.result is Outcome.SUCCEEDED
+
+
+@dataclass(frozen=True)
+class ExecutionReport:
+    """The outcome of an execution, from the executor's final status."""
+
+    result: Outcome
+    message: str
+    execution: int | None = None
+    values: dict = field(default_factory=dict)   # the status values, as text
+
+    def number(self, key: str, default: float = float('nan')) -> float:
+        """Return a numeric status value (e.g. 'recovery_time_s', 'lock_progress')."""
+        try:
+            return float(self.values[key])
+        except (KeyError, ValueError):
+            return default
+
+
+class PlanClient(Node):
+    """Call the ftplan planner and executor with blocking verbs; see the module docstring."""
+
+    def __init__(self, node_name: str = 'ftplan_plan_client', *,
+                 planner_name: str = PLANNER_NODE, executor_name: str = EXECUTOR_NODE,
+                 **kwargs):
+        super().__init__(node_name, **kwargs)
+        self._planner_status = f'{planner_name}: plan'
+        self._executor_status = f'{executor_name}: execution'
+        self.plan_client = self.create_client(GetPlan, PLAN_SERVICE)
+        self.execute_client = self.create_client(Trigger, EXECUTE_SERVICE)
+        self._trigger_clients: dict[str, object] = {}
+        self._statuses: dict[str, DiagnosticReading] = {}
+        self._status_log: list[tuple[int, DiagnosticReading]] = []
+        self._status_seq = 0
+        self._start: JointState | None = None
+        self._trajectory: JointTrajectory | None = None
+        self._surface: Float64MultiArray | None = None
+        self.create_subscription(DiagnosticArray, DIAGNOSTICS, self._diagnostics_callback, 50)
+        self.create_subscription(JointState, START_CONFIGURATION,
+                                 lambda msg: setattr(self, '_start', msg), LATCHED_QOS)
+        self.create_subscription(JointTrajectory, TRAJECTORY,
+                                 lambda msg: setattr(self, '_trajectory', msg), LATCHED_QOS)
+        self.create_subscription(Float64MultiArray, FAILURE_SURFACE,
+                                 lambda msg: setattr(self, '_surface', msg), LATCHED_QOS)
+        self._executor = SingleThreadedExecutor(context=self.context)
+        self._executor.add_node(self)
+
+    def destroy_node(self) -> None:
+        """Stop the client's executor and destroy the node."""
+        self._executor.remove_node(self)
+        self._executor.shutdown()
+        super().destroy_node()
+
+    # Spinning -----------------------------------------------------------------------
+
+    def spin_until(self, done: Callable[[], bool], timeout: float) -> bool:
+        """Spin this client until `done()` or `timeout` [s]; return whether it is done."""
+        deadline = time.monotonic() + timeout
+        while not done():
+            left = deadline - time.monotonic()
+            if left <= 0.0:
+                return False
+            self._executor.spin_once(timeout_sec=min(_POLL, left))
+        return True
+
+    def _call(self, client, request, timeout: float):
+        """Call a service; return (response or None, round trip [s])."""
+        sent = time.perf_counter()
+        future = client.call_async(request)
+        self.spin_until(future.done, timeout)
+        elapsed = time.perf_counter() - sent
+        if not future.done():
+            client.remove_pending_request(future)
+            return None, elapsed
+        return future.result(), elapsed
+
+    def _diagnostics_callback(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            try:
+                reading = read_diagnostic_status(status)
+            except ValueError:
+                continue
+            self._statuses[reading.name] = reading
+            self._status_seq += 1
+            self._status_log.append((self._status_seq, reading))
+        del self._status_log[:-_STATUS_LOG_SIZE]
+
+    def status(self, name: str) -> DiagnosticReading | None:
+        """Return the latest status `name` seen on /diagnostics (e.g. 'ftplan_sim: arm')."""
+        return self._statuses.get(name)
+
+    @property
+    def status_mark(self) -> int:
+        """A mark in the status log: pass it as `since` to look only at later statuses."""
+        return self._status_seq
+
+    def statuses(self, name: str, since: int = 0) -> list[DiagnosticReading]:
+        """Return the recent statuses `name` (after the mark `since`), oldest first."""
+        return [reading for seq, reading in self._status_log
+                if reading.name == name and seq > since]
+
+    def wait_for_status(self, name: str, accept: Callable[[dict], bool], timeout: float,
+                        since: int = 0) -> DiagnosticReading | None:
+        """Spin until a status `name` after `since` has values that `accept`; None on timeout."""
+        found: list[DiagnosticReading] = []
+
+        def seen() -> bool:
+            for seq, reading in self._status_log:
+                if seq > since and reading.name == name and accept(reading.values):
+                    found.append(reading)
+                    return True
+            return False
+
+        return found[0] if self.spin_until(seen, timeout) else None
+
+    # Verbs --------------------------------------------------------------------------
+
+    def wait_until_ready(self, timeout: float = 10.0) -> bool:
+        """Wait until the plan and execute services are available."""
+        deadline = time.monotonic() + timeout
+        for client in (self.plan_client, self.execute_client):
+            if not self.spin_until(client.service_is_ready, max(0.0, deadline -
+                                                                time.monotonic())):
+                self.get_logger().warning(f'{client.srv_name} is not available')
+                return False
+        return True
+
+    def plan(self, goal: Sequence[float] | None = None, start: Sequence[float] | None = None,
+             tolerance: float = 0.0, frame_id: str = 'base_link',
+             timeout: float = 30.0) -> PlannedMotion:
+        """Ask for a failure-tolerant plan from `start` (None: where the arm is) to `goal`.
+
+        :param goal: (2,) or (3,) goal position [m] in `frame_id`; None: the scene's goal.
+        :param start: start position [m] in `frame_id`; None: the arm's current position.
+        :param tolerance: goal tolerance [m]; 0 keeps the scene's.
+        :param timeout: seconds to wait for the answer and the latched plan topics.
+        """
+        if not self.spin_until(self.plan_client.service_is_ready, min(timeout, 5.0)):
+            return PlannedMotion(Outcome.UNAVAILABLE, f'{PLAN_SERVICE} is not available')
+        request = GetPlan.Request(start=_pose(start, frame_id), goal=_pose(goal, frame_id),
+                                  tolerance=float(tolerance))
+        deadline = time.monotonic() + timeout
+        mark = self.status_mark
+        response, round_trip = self._call(self.plan_client, request, timeout)
+        if response is None:
+            return PlannedMotion(Outcome.TIMED_OUT, f'no answer from {PLAN_SERVICE} within '
+                                 f'{timeout} s', round_trip_s=round_trip)
+        key = stamp_key(response.plan.header.stamp)
+        status = self.wait_for_status(self._planner_status, lambda v: v.get('stamp') == key,
+                                      1.0 if not response.plan.poses else 0.2, mark)
+        plan_time = _number(status.values.get('plan_time_s')) if status else float('nan')
+        if not response.plan.poses:
+            reason = status.message if status else \
+                'no failure-tolerant plan (the planner\'s reason did not arrive)'
+            return PlannedMotion(Outcome.FAILED, reason, key, round_trip_s=round_trip,
+                                 plan_time_s=plan_time)
+        gathered = self._gather_plan(key, max(0.0, deadline - time.monotonic()))
+        if gathered is None:
+            return PlannedMotion(Outcome.TIMED_OUT, f'plan {key} answered, but its latched '
+                                 'topics did not all arrive', key, round_trip_s=round_trip,
+                                 plan_time_s=plan_time)
+        names, theta_s, trajectory, times, surface, index = gathered
+        return PlannedMotion(Outcome.SUCCEEDED, status.message if status else 'plan found',
+                             key, names, read_path(response.plan), theta_s, trajectory, times,
+                             surface, index, round_trip, plan_time)
+
+    def _gather_plan(self, key: str, timeout: float):
+        """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in."""
+        found = []
+
+        def complete() -> bool:
+            start, trajectory, surface = self._start, self._trajectory, self._surface
+            if start is None or trajectory is None or surface is None or \
+                    stamp_key(start.header.stamp) != key or \
+                    stamp_key(trajectory.header.stamp) != key:
+                return False
+            names = tuple(trajectory.joint_names)
+            positions, times = read_joint_trajectory(trajectory, names)
+            paths = read_failure_surface(surface)
+            if paths.shape[1:] != positions.shape:
+                return False
+            matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
+            if len(matches) == 0:
+                return False
+            theta_s = np.array([start.position[list(start.name).index(n)] for n in names])
+            found.append((names, theta_s, positions, times, paths, int(matches[0])))
+            return True
+
+        return found[0] if self.spin_until(complete, timeout) else None
+
+    def execute(self, motion: PlannedMotion | None = None, timeout: float = 120.0,
+                ) -> ExecutionReport:
+        """Execute the executor's plan (`motion`'s, once the executor holds it) to the end.
+
+        Returns when the executor reports done (SUCCEEDED) or failed (FAILED), or after
+        `timeout` [s] (TIMED_OUT).
+        """
+        if not self.spin_until(self.execute_client.service_is_ready, min(timeout, 5.0)):
+            return ExecutionReport(Outcome.UNAVAILABLE, f'{EXECUTE_SERVICE} is not available')
+        deadline = time.monotonic() + timeout
+        if motion is not None and motion.stamp:
+            held = self.wait_for_status(self._executor_status,
+                                         lambda v: v.get('plan') == motion.stamp,
+                                         min(timeout, 5.0))
+            if held is None:
+                return ExecutionReport(Outcome.TIMED_OUT,
+                                       f'the executor did not receive plan {motion.stamp}')
+        mark = self.status_mark
+        response, _ = self._call(self.execute_client, Trigger.Request(),
+                                 max(0.0, deadline - time.monotonic()))
+        if response is None:
+            return ExecutionReport(Outcome.TIMED_OUT, f'no answer from {EXECUTE_SERVICE}')
+        if not response.success:
+            return ExecutionReport(Outcome.FAILED, response.message)
+        number = _execution_number(response.message)
+        final = self.wait_for_status(
+            self._executor_status,
+            lambda v: v.get('execution') == str(number) and v.get('state') in ('done', 'failed'),
+            max(0.0, deadline - time.monotonic()), mark)
+        if final is None:
+            return ExecutionReport(Outcome.TIMED_OUT, f'execution {number} did not finish '
+                                   f'within {timeout} s', number)
+        result = Outcome.SUCCEEDED if final.values['state'] == 'done' else Outcome.FAILED
+        return ExecutionReport(result, final.message, number, dict(final.values))
+
+    def trigger(self, service: str, timeout: float = 5.0) -> tuple[bool, str]:
+        """Call a std_srvs/Trigger service (e.g. '/ftplan_sim/reset'); (success, message)."""
+        client = self._trigger_clients.get(service)
+        if client is None:
+            client = self._trigger_clients[service] = self.create_client(Trigger, service)
+        if not self.spin_until(client.service_is_ready, timeout):
+            return False, f'{service} is not available'
+        response, _ = self._call(client, Trigger.Request(), timeout)
+        if response is None:
+            return False, f'no answer from {service} within {timeout} s'
+        return response.success, response.message
+
+
+def _pose(position: Sequence[float] | None, frame_id: str) -> PoseStamped:
+    """Make a PoseStamped at `position` [m] in `frame_id`; None gives an empty frame."""
+    if position is None:
+        return PoseStamped()
+    xyz = [float(v) for v in position] + [0.0] * (3 - len(position))
+    return PoseStamped(header=Header(frame_id=frame_id),
+                       pose=Pose(position=Point(x=xyz[0], y=xyz[1], z=xyz[2])))
+
+
+def _number(text: str | None) -> float:
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return float('nan')
+
+
+def _execution_number(message: str) -> int | None:
+    """Read the execution number in the executor's 'execution N: ...' answer."""
+    head = message.split(':', 1)[0].split()
+    return int(head[1]) if len(head) == 2 and head[0] == 'execution' and head[1].isdigit() \
+        else None

@@ -1,0 +1,148 @@
+"""The executor with the planner and the sim, in one process: bad inputs and phases."""
+
+import numpy as np
+import pytest
+from ros_support import wait_for
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+
+from ftplan_msgs_py import create_locked_joint
+from ftplan_ros.nodes.executor import ExecutorNode
+from ftplan_ros.nodes.planner import PlannerNode
+from ftplan_ros.nodes.sim import SimNode
+from ftplan_ros.plan_client import Outcome, PlanClient
+
+STATUS = 'ftplan_executor: execution'
+
+
+def execution(ros, number):
+    """The executor's statuses about execution `number`."""
+    return [s for s in ros.probe.statuses(STATUS) if s.values.get('execution') == str(number)]
+
+
+def state_of(ros, number, state):
+    return wait_for(lambda: [s for s in execution(ros, number) if s.values['state'] == state],
+                    what=f'execution {number} {state}')[0]
+
+
+@pytest.fixture
+def suite(ros):
+    """Planner, executor and sim (no injector: the test plays the failures)."""
+    ros.make(PlannerNode)
+    ros.make(ExecutorNode, max_joint_speed=2.0)
+    ros.make(SimNode, max_joint_speed=4.0)
+    return ros
+
+
+def plan(ros):
+    client = PlanClient(context=ros.context)
+    try:
+        motion = client.plan(goal=(1.0, 0.0), start=(2.0, 0.0), timeout=60.0)
+    finally:
+        client.destroy_node()
+    assert motion.result is Outcome.SUCCEEDED, motion.message
+    wait_for(lambda: [s for s in ros.probe.statuses(STATUS)
+                      if s.values['plan'] == motion.stamp], what='the executor to hold it')
+    return motion
+
+
+def execute(ros):
+    response = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert response.success, response.message
+    return int(response.message.split(':')[0].split()[1])
+
+
+def reset(ros):
+    assert ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request()).success
+
+
+def test_execute_without_a_plan_or_while_busy_is_refused(suite):
+    ros = suite
+    response = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert not response.success and 'no plan yet' in response.message
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'execute refused: no plan yet'))
+    plan(ros)
+    number = execute(ros)
+    busy = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert not busy.success and 'still' in busy.message
+    done = state_of(ros, number, 'done')
+    assert float(done.values['goal_error_m']) < 0.01
+    assert 'locked_joint' not in done.values
+    # Another execution from the goal: back to theta_s, then the same path again.
+    assert state_of(ros, execute(ros), 'done')
+
+
+def test_a_lock_of_an_unknown_joint_is_logged_and_ignored(suite):
+    ros = suite
+    plan(ros)
+    number = execute(ros)
+    state_of(ros, number, 'nominal')
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('elbow'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor', "ignored lock of unknown joint 'elbow'"))
+    done = state_of(ros, number, 'done')
+    assert 'locked_joint' not in done.values                 # no recovery was started
+    inputs = ros.probe.statuses('ftplan_executor: input')
+    assert any(s.level == 'WARN' and 'elbow' in s.message for s in inputs)
+    malformed = JointState(name=['joint1', 'joint2'])
+    ros.probe.publish(JointState, '/ftplan/locked_joint', malformed)
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'ignored locked-joint event'))
+
+
+def test_a_lock_during_no_execution_is_logged_and_ignored(suite):
+    ros = suite
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint2'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor',
+                                      'ignored lock of joint2: no execution is running'))
+    assert all(s.values['state'] == 'idle' for s in ros.probe.statuses(STATUS))
+    reset(ros)                                               # the sim did lock it: free it
+    plan(ros)
+    number = execute(ros)
+    state_of(ros, number, 'done')
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint3'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor',
+                                      f'ignored lock of joint3: execution {number} is done'))
+
+
+def test_a_lock_while_approaching_fails_cleanly_and_the_next_run_succeeds(suite):
+    ros = suite
+    plan(ros)
+    number = execute(ros)
+    state_of(ros, number, 'approaching')
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1'))
+    failed = state_of(ros, number, 'failed')
+    assert 'before the failure-tolerant nominal path' in failed.values['reason']
+    assert failed.level == 'ERROR'
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint1 locked while approaching'))
+    reset(ros)
+    assert state_of(ros, execute(ros), 'done')
+
+
+def test_a_lock_during_the_nominal_phase_is_recovered_by_the_core(suite):
+    ros = suite
+    motion = plan(ros)
+    number = execute(ros)
+    wait_for(lambda: [s for s in execution(ros, number)
+                      if s.values['state'] == 'nominal' and float(s.values['progress']) > 0.3])
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint3'))
+    done = state_of(ros, number, 'done')
+    assert done.values['locked_joint'] == 'joint3'
+    assert 0.3 < float(done.values['lock_progress']) < 1.0
+    assert float(done.values['goal_error_m']) < 0.01
+    # The arm stopped on the nominal path, and joint3 stayed where it locked.
+    locked = np.array([float(v) for v in done.values['lock_configuration'].strip('[]').split(',')])
+    gaps = np.linalg.norm(motion.trajectory - locked, axis=1)
+    assert gaps.min() < np.abs(np.diff(motion.trajectory, axis=0)).max() * 2
+    final = wait_for(lambda: [s for s in ros.probe.statuses('ftplan_sim: arm')
+                              if s.values['goal_reached'] == 'True'])[-1]
+    q = np.array([float(v) for v in final.values['configuration'].strip('[]').split(',')])
+    assert q[2] == pytest.approx(locked[2], abs=1e-6)
+    assert final.values['collisions'] == '0'
+
+
+def test_an_execution_without_joint_states_fails_after_start_timeout(ros):
+    ros.make(PlannerNode)
+    ros.make(ExecutorNode, start_timeout=0.5)
+    plan(ros)
+    number = execute(ros)
+    failed = state_of(ros, number, 'failed')
+    assert 'no joint state' in failed.values['reason']

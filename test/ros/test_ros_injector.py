@@ -1,0 +1,90 @@
+"""The injector: drill parsing, seeded random drills, manual and scheduled events."""
+
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+from ros_support import wait_for
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+
+from ftplan_msgs_py import read_locked_joint
+from ftplan_ros.nodes.executor import ExecutorNode
+from ftplan_ros.nodes.injector import Drill, InjectorNode, parse_drill, random_drill
+from ftplan_ros.nodes.planner import PlannerNode
+from ftplan_ros.nodes.sim import SimNode
+from ftplan_ros.plan_client import Outcome, PlanClient
+
+NAMES = ('joint1', 'joint2', 'joint3')
+
+
+def test_drills_parse_fractions_and_seconds():
+    assert parse_drill('joint2@0.4', NAMES) == Drill('joint2', fraction=0.4)
+    assert parse_drill(' joint1 @ 2.5s ', NAMES) == Drill('joint1', seconds=2.5)
+    assert parse_drill('joint3@1', NAMES) == Drill('joint3', fraction=1.0)
+    assert str(parse_drill('joint1@2.5s', NAMES)) == 'joint1@2.5s'
+
+
+@pytest.mark.parametrize('text, problem', [
+    ('joint9@0.5', "unknown joint 'joint9'"),
+    ('joint1@1.5', 'must be in [0, 1]'),
+    ('joint1', 'is not JOINT@FRACTION'),
+    ('joint1@-0.2', 'is not JOINT@FRACTION'),
+    ('joint1@nan', 'is not JOINT@FRACTION'),
+])
+def test_bad_drills_say_what_is_wrong(text, problem):
+    with pytest.raises(ValueError, match=problem.replace('[', r'\[').replace(']', r'\]')):
+        parse_drill(text, NAMES)
+
+
+def test_random_drills_repeat_with_their_seed_and_cover_every_joint():
+    def sequence(seed):
+        rng = np.random.default_rng(seed)
+        return [random_drill(rng, NAMES) for _ in range(10)]
+    assert sequence(7) == sequence(7) != sequence(8)
+    rng = np.random.default_rng(3)
+    drills = [random_drill(rng, NAMES) for _ in range(200)]
+    assert {d.joint for d in drills} == set(NAMES)
+    assert all(0.0 <= d.fraction <= 1.0 for d in drills)
+
+
+def test_lock_now_publishes_one_event_and_clears_itself(ros):
+    injector = ros.make(InjectorNode)
+    ros.probe.listen(JointState, '/ftplan/locked_joint')
+    wait_for(lambda: injector.lock_publisher.get_subscription_count() > 0)
+    result = injector.set_parameters([Parameter('lock_now', value='joint3')])[0]
+    assert result.successful
+    event = read_locked_joint(wait_for(lambda: ros.probe.received('/ftplan/locked_joint'))[0])
+    assert event.name == 'joint3' and event.angle is None
+    wait_for(lambda: injector.get_parameter('lock_now').value == '', what='lock_now cleared')
+    assert len(ros.probe.received('/ftplan/locked_joint')) == 1
+    wait_for(lambda: ros.probe.logged('ftplan_injector', 'locked joint3: manual lock_now'))
+    rejected = injector.set_parameters([Parameter('lock_now', value='elbow')])[0]
+    assert not rejected.successful and "unknown joint 'elbow'" in rejected.reason
+    bad = injector.set_parameters([Parameter('drills', value=['joint1@0.5', 'joint9@0.1'])])[0]
+    assert not bad.successful and 'joint9' in bad.reason
+    assert injector.queue == []
+    assert len(ros.probe.received('/ftplan/locked_joint')) == 1
+
+
+def test_a_drill_in_seconds_at_the_start_locks_during_the_approach(ros):
+    """joint1@0.0s fires as the execution starts: the executor fails it, nobody crashes."""
+    ros.make(PlannerNode)
+    ros.make(ExecutorNode, max_joint_speed=2.0)
+    ros.make(SimNode, max_joint_speed=4.0)
+    ros.make(InjectorNode, drills=['joint1@0.0s', 'joint2@0.5'])
+    client = PlanClient(context=ros.context)
+    try:
+        motion = client.plan(goal=(1.0, 0.0), start=(2.0, 0.0), timeout=60.0)
+        assert motion.result is Outcome.SUCCEEDED, motion.message
+        first = client.execute(motion, timeout=60.0)
+        assert first.result is Outcome.FAILED
+        assert 'locked while approaching' in first.message
+        assert client.trigger('/ftplan_sim/reset')[0]
+        second = client.execute(motion, timeout=60.0)
+    finally:
+        client.destroy_node()
+    assert second.result is Outcome.SUCCEEDED, second.message
+    assert second.values['locked_joint'] == 'joint2'
+    assert second.number('lock_progress') >= 0.5
+    wait_for(lambda: ros.probe.logged('ftplan_injector', 'execution 2: drill joint2@0.5'))
+    assert ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request()).success

@@ -1,0 +1,148 @@
+"""The sim node in-process: following commands, velocity limits, locks, collisions, reset."""
+
+import numpy as np
+import pytest
+from ros_support import FIG3A, SCENES, wait_for
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from ftplan_msgs_py import create_joint_trajectory, create_locked_joint, read_joint_state
+from ftplan_ros.core import CollisionChecker, load_scene
+from ftplan_ros.nodes.sim import SimNode
+
+NAMES = ['joint1', 'joint2', 'joint3']
+STATUS = 'ftplan_sim: arm'
+SPEED = 2.0  # [rad/s] the sim's velocity limit in these tests
+
+
+@pytest.fixture
+def sim(ros):
+    ros.make(SimNode, SCENES / 'paper_a_free.yaml', max_joint_speed=SPEED,
+             initial_configuration=[0.0, 0.0, 0.0])
+    ros.probe.listen(JointState, '/joint_states', 1000)
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    return ros
+
+
+def states(ros):
+    return [(msg, read_joint_state(msg, NAMES)) for msg in ros.probe.received('/joint_states')]
+
+
+def command(ros, positions, times):
+    ros.probe.publish(JointTrajectory, '/ftplan/joint_command',
+                      create_joint_trajectory(NAMES, positions, times))
+
+
+def last(ros):
+    """The latest joint configuration (reading only the newest message: polls stay cheap)."""
+    msgs = ros.probe.received('/joint_states')
+    return read_joint_state(msgs[-1], NAMES) if msgs else None
+
+
+def at(ros, q, atol=1e-12):
+    def check():
+        now = last(ros)
+        return now is not None and np.allclose(now, q, atol=atol, rtol=0)
+    return check
+
+
+def test_the_sim_follows_a_command_and_slows_down_a_too_fast_one(sim):
+    ros = sim
+    target = [1.5, -1.0, 0.5]
+    command(ros, [[0.5, -0.2, 0.1], target], [0.1, 0.2])   # asks for 8 rad/s
+    wait_for(at(ros, target), what='the arm at the target')
+    velocities = np.array([msg.velocity for msg, _ in states(ros)])
+    assert np.abs(velocities).max() <= SPEED * (1 + 1e-6)
+    assert np.abs(velocities).max() > 0.5 * SPEED
+    positions = np.array([q for _, q in states(ros)])
+    steps = np.abs(np.diff(positions, axis=0)).max(axis=1)
+    assert steps.max() <= SPEED / 100.0 * (1 + 1e-6)        # one tick at 100 Hz
+    wait_for(lambda: any(s.values['state'] == 'stopped' for s in ros.probe.statuses(STATUS)))
+
+
+def test_a_locked_joint_brakes_the_arm_and_stays_locked(sim):
+    ros = sim
+    command(ros, [[3.0, 3.0, 3.0]], [1.5])
+    wait_for(lambda: last(ros)[0] > 0.5, what='the arm moving')
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint2'))
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS)
+                               if s.values['locked'] == 'joint2'])[0]
+    assert status.level == 'WARN' and 'joint2 locked' in status.message
+    # Braked: two joint states in a row are equal, and the arm is short of the target.
+    def braked():
+        recent = [read_joint_state(m, NAMES) for m in ros.probe.received('/joint_states')[-2:]]
+        return len(recent) == 2 and np.array_equal(*recent)
+    wait_for(braked, what='the arm to stop')
+    stopped = last(ros)
+    assert stopped[0] < 3.0 and np.allclose(stopped, stopped[0])   # still on the straight line
+    # A new command moves the free joints only; the locked one is held (and reported).
+    command(ros, [[0.0, 0.0, 0.0]], [2.0])
+    wait_for(lambda: abs(last(ros)[0]) < 1e-12, what='joint1 back at 0')
+    assert last(ros)[1] == stopped[1]
+    wait_for(lambda: ros.probe.logged('ftplan_sim', 'moves locked joint joint2'))
+
+
+def test_reset_unlocks_and_returns_to_the_initial_configuration(sim):
+    ros = sim
+    command(ros, [[1.0, 1.0, 1.0]], [1.0])
+    wait_for(at(ros, [1.0, 1.0, 1.0]))
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1'))
+    wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.values['locked'] == 'joint1'])
+    response = ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request())
+    assert response.success
+    wait_for(at(ros, [0.0, 0.0, 0.0]))
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS)
+                               if s.values['resets'] == '1'])[-1]
+    assert status.values['locked'] == '' and status.values['collisions'] == '0'
+    command(ros, [[0.5, 0.5, 0.5]], [1.0])                 # joint1 moves again
+    wait_for(at(ros, [0.5, 0.5, 0.5]))
+
+
+def test_malformed_commands_and_events_are_logged_and_ignored(sim):
+    ros = sim
+    bad = JointTrajectory(joint_names=['joint1', 'elbow'], points=[
+        JointTrajectoryPoint(positions=[1.0, 1.0])])
+    ros.probe.publish(JointTrajectory, '/ftplan/joint_command', bad)
+    wait_for(lambda: ros.probe.logged('ftplan_sim', 'ignored joint command'))
+    nan = JointTrajectory(joint_names=NAMES, points=[
+        JointTrajectoryPoint(positions=[1.0, float('nan'), 0.0])])
+    ros.probe.publish(JointTrajectory, '/ftplan/joint_command', nan)
+    wait_for(lambda: len(ros.probe.logged('ftplan_sim', 'ignored joint command')) >= 2)
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('elbow'))
+    wait_for(lambda: ros.probe.logged('ftplan_sim', "unknown joint 'elbow'"))
+    ros.probe.publish(JointState, '/ftplan/locked_joint', JointState(name=['a', 'b']))
+    wait_for(lambda: ros.probe.logged('ftplan_sim', 'ignored locked-joint event'))
+    assert np.array_equal(last(ros), [0.0, 0.0, 0.0])
+    assert all(s.values['locked'] == '' for s in ros.probe.statuses(STATUS))
+    command(ros, [[0.2, 0.2, 0.2]], [0.5])                 # still works
+    wait_for(at(ros, [0.2, 0.2, 0.2]))
+
+
+def test_collisions_are_reported_and_the_goal_is_recognised(ros):
+    scene = load_scene(FIG3A)
+    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0])
+    ros.probe.listen(JointState, '/joint_states', 1000)
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    # Sweep joint1 a full turn: the stretched arm hits the disks on the way.
+    sweep = np.column_stack([np.linspace(0.0, 2 * np.pi, 64), np.zeros(64), np.zeros(64)])
+    assert checker.min_clearance(sweep).min() < 0.0
+    command(ros, sweep[1:], np.linspace(0.1, 3.0, 63))
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.level == 'ERROR'])[0]
+    assert 'collision' in status.message and int(status.values['collisions']) >= 1
+    assert float(status.values['min_clearance_m']) < 0.0
+    wait_for(lambda: ros.probe.logged('ftplan_sim', 'collision at'))
+    # A configuration at the task goal (1, 0): 'goal reached'.
+    theta = _configuration_at(scene, np.array(scene.task.goal))
+    command(ros, [theta], [2.0])
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS)
+                               if s.values['goal_reached'] == 'True'])[-1]
+    assert float(status.values['goal_error_m']) <= scene.task.goal_tolerance
+
+
+def _configuration_at(scene, x):
+    """A configuration (n,) with the end effector at x, by the core's Newton projection."""
+    from ftplan_ros.core.manifolds import project_to_preimage
+    theta = project_to_preimage(scene.robot, x, np.array([0.3, 1.0, 1.0]))
+    assert theta is not None
+    return theta
