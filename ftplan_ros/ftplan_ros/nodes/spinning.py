@@ -26,13 +26,14 @@ from collections.abc import Callable, Sequence
 import rclpy
 from rclpy.context import Context
 from rclpy.event_handler import EventHandler
-from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.executors import ExternalShutdownException
 from rclpy.executors import MultiThreadedExecutor as _RclpyMultiThreadedExecutor
 from rclpy.node import Node
 
 from .params import STARTUP_ERRORS
 
 MIN_THREADS = 4
+_STOP_POLL = 0.1  # [s] longest wait of a BackgroundSpin before it looks for a stop
 
 
 class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
@@ -49,27 +50,28 @@ class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
         """Leave QoS event handlers out of the wait set (the first busy loop above)."""
         return not isinstance(entity, EventHandler) and super().can_execute(entity)
 
+    def shutdown(self, timeout_sec: float | None = None) -> bool:
+        """Shut down after `spin` has returned: first run every handler already handed out.
+
+        rclpy 7 destroys its guard condition without waiting for the handlers queued in
+        its thread pool (it tests its shutdown flag right after setting it); each of them
+        then fails on that guard, and the failure is printed as "exception was never
+        retrieved" when the handler is collected. Failures of the handlers that ran since
+        the last `spin_once` are logged here rather than lost.
+        """
+        self._executor.shutdown(wait=True)
+        for handler in self._futures:
+            if handler.done() and handler.exception() is not None:
+                rclpy.logging.get_logger('ftplan_executor').error(
+                    f'a callback failed: {handler.exception()!r}')
+        self._futures.clear()
+        return super().shutdown(timeout_sec)
+
     def _make_handler(self, entity, node, take_from_wait_list):
         task = super()._make_handler(entity, node, take_from_wait_list)
         with self._tasks_lock:
             self._tasks = [entry for entry in self._tasks if entry[0] is not task]
         return task
-
-
-def stop_executor(executor: Executor, nodes: Sequence[Node], timeout: float = 5.0) -> None:
-    """Take the nodes off `executor`, let the callbacks in flight finish, shut it down.
-
-    rclpy 7's Executor.shutdown() means to wait for the callbacks in flight but does not
-    (it tests the shutdown flag right after setting it), so a callback that ends after
-    it meets destroyed handles; this waits on the executor's work tracker first.
-    """
-    for node in nodes:
-        executor.remove_node(node)
-    tracker = getattr(executor, '_work_tracker', None)
-    if tracker is not None:
-        tracker.wait(timeout)
-    executor.shutdown(timeout_sec=timeout)
-
 
 
 class BackgroundSpin:
@@ -81,6 +83,7 @@ class BackgroundSpin:
         self.nodes: list[Node] = []
         for node in nodes:
             self.add(node)
+        self._stopping = threading.Event()
         self.thread = threading.Thread(target=self._spin, name=name, daemon=True)
         self.thread.start()
 
@@ -91,15 +94,19 @@ class BackgroundSpin:
         return node
 
     def stop(self, timeout: float = 5.0) -> None:
-        """Stop spinning, let callbacks in flight finish and destroy every node."""
-        stop_executor(self.executor, self.nodes, timeout)
+        """Stop spinning, let the callbacks handed out finish and destroy every node."""
+        for node in self.nodes:
+            self.executor.remove_node(node)
+        self._stopping.set()
         self.thread.join(timeout=timeout)
+        self.executor.shutdown()
         for node in self.nodes:
             node.destroy_node()
 
     def _spin(self) -> None:
         try:
-            self.executor.spin()
+            while not self._stopping.is_set() and self.executor.context.ok():
+                self.executor.spin_once(timeout_sec=_STOP_POLL)
         except ExternalShutdownException:
             pass
 
@@ -111,10 +118,10 @@ def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = 
     one fatal log line.
     """
     rclpy.init(args=args)
+    executor = MultiThreadedExecutor()
     node = None
     try:
         node = make_node()
-        executor = MultiThreadedExecutor()
         executor.add_node(node)
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -123,6 +130,7 @@ def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = 
         rclpy.logging.get_logger(name).fatal(f'cannot start: {error}')
         return 2
     finally:
+        executor.shutdown()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
