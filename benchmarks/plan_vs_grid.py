@@ -1,6 +1,6 @@
 """Time the planner against the exhaustive grid baseline on the same random scenes.
 
-    .venv/bin/python benchmarks/plan_vs_grid.py [--scenes 20] [--seed 0] [--cells 90]
+    .venv/bin/python benchmarks/plan_vs_grid.py [--scenes 30] [--seed 0] [--cells 90] [--json F]
 
 The same as `ftplan bench`; see ftplan_ros/bench.py for what is measured.
 """

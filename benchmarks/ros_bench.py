@@ -26,20 +26,23 @@ import os
 import subprocess
 import sys
 import time
-import uuid
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'test' / 'ros'))  # ros_domain: the tests' domain claim
+
+from ros_domain import claim_domain  # noqa: E402
+
 SCENES = ('fig3a', 'fig3b', 'fig3c', 'paper_a_free', 'paper_c_free')
 BASE_SCENE = REPO / 'config' / 'scenes' / 'paper_a_free.yaml'
 INSTALLED_PLANNER = REPO / 'install' / 'ftplan_ros' / 'lib' / 'ftplan_ros' / 'planner'
 
 
 def _environment() -> None:
-    """A private ROS domain, and the installed layout for ament_index."""
-    os.environ.setdefault('ROS_DOMAIN_ID', str(150 + uuid.uuid4().int % 50))
+    """A ROS domain no test run or other benchmark uses, and the installed layout."""
+    claim_domain()
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     prefix = f'{REPO}/install/ftplan_ros:{REPO}/install/ftplan_msgs_py'
     if prefix not in os.environ.get('AMENT_PREFIX_PATH', ''):

@@ -45,8 +45,8 @@ def read_failure_surface(msg: Float64MultiArray) -> NDArray[np.float64]:
     :param msg: the array; layout dims labelled exactly `path`, `waypoint`, `joint` with
         row-major strides, and exactly K * W * n values after `data_offset`.
     :return: (K, W, n) joint angles [rad].
-    :raises ValueError: on other labels, inconsistent sizes, strides or data length, or a
-        non-finite value.
+    :raises ValueError: on other labels, an empty size, inconsistent sizes, strides or
+        data length, or a non-finite value.
     """
     labels = tuple(dim.label for dim in msg.layout.dim)
     if labels != FAILURE_SURFACE_LABELS:
@@ -56,6 +56,8 @@ def read_failure_surface(msg: Float64MultiArray) -> NDArray[np.float64]:
         )
     shape = tuple(int(dim.size) for dim in msg.layout.dim)
     K, W, n = shape
+    if min(shape) < 1:
+        raise ValueError(f'failure surface sizes are {list(shape)}; each must be >= 1')
     expected_strides = (K * W * n, W * n, n)
     strides = tuple(int(dim.stride) for dim in msg.layout.dim)
     if strides != expected_strides:

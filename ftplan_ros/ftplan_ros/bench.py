@@ -73,16 +73,19 @@ def run_scene(scene: Scene, group: str, cells: int) -> SceneRun:
     grid = grid_plan(checker, x_s, x_g, cells)
     grid_time = time.perf_counter() - started
     refuted = (result.feasible and not grid.feasible
-               and not referee_agrees(checker, result, x_g))
+               and not referee_agrees(checker, result, x_g, scene.task.goal_tolerance))
     return SceneRun(group, len(scene.obstacles), result.feasible, cold, warm, grid.feasible,
                     grid_time, refuted, result.reason)
 
 
 def referee_agrees(checker: CollisionChecker, result, x_goal: np.ndarray,
-                   moments: int = 9, cells: int = 360) -> bool:
-    """Whether every lock at `moments` points of the nominal path may still reach x_g."""
+                   goal_tolerance: float, moments: int = 9, cells: int = 360) -> bool:
+    """Whether every lock at `moments` points of the nominal path may still reach x_g.
+
+    Reaching means coming within `goal_tolerance` [m], as the guarantee says.
+    """
     return all(recoverable_in_plane(checker, point_at_fraction(result.nominal_path, f), joint,
-                                    x_goal, cells)
+                                    x_goal, cells, goal_tolerance=goal_tolerance)
                for f in np.linspace(0.0, 1.0, moments)
                for joint in range(checker.robot.n_joints))
 

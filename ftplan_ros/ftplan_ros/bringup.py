@@ -151,8 +151,11 @@ class Director:
         return self.motion
 
     def run(self, number: int, record: bool = False, timeout: float = 120.0) -> RunReport:
-        """Reset the sim, execute the plan (the injector drills it) and judge the run."""
+        """Reset the executor and sim, execute the plan (the injector drills it), judge the run."""
         client = self.client
+        repaired, why = client.trigger(f'/{EXECUTOR_NODE}/reset')
+        if not repaired:
+            return RunReport(number, '', False, f'executor reset failed: {why}')
         ok, message = client.trigger(f'/{SIM_NODE}/reset')
         if not ok:
             return RunReport(number, '', False, f'sim reset failed: {message}')

@@ -1,9 +1,9 @@
 """The `ftplan` command: plan, drill, draw and benchmark failure-tolerant motions.
 
-    ftplan plan SCENE.yaml [--json OUT.json] [--png FIG.png]
-    ftplan drill SCENE.yaml --trials N --seed S [--png MOTION.png]
+    ftplan plan SCENE.yaml [--json OUT.json] [--png FIG.png] [--seed S] [--margin M]
+    ftplan drill SCENE.yaml [--trials N] [--seed S] [--png MOTION.png]
     ftplan figure SCENE.yaml [--out DIR]
-    ftplan bench [--scenes N] [--seed S]
+    ftplan bench [--scenes N] [--seed S] [--cells C] [--json OUT.json]
 
 Exit codes: 0 done (for `plan`: a failure-tolerant plan exists), 1 no failure-tolerant
 plan (or a drill trial failed), 2 bad input (one line on stderr naming the field).
@@ -103,7 +103,17 @@ def _planner_arguments(parser: argparse.ArgumentParser) -> None:
                         help='clearance [m] the guarantee keeps from obstacles (0.0)')
 
 
+def _at_least(value: int, least: int, flag: str) -> None:
+    if value < least:
+        raise InputError(flag, f'must be at least {least}, got {value}')
+
+
 def _plan(args: argparse.Namespace, progress: Progress):
+    """Check the flags (before any work), load the scene and plan it."""
+    png = getattr(args, 'png', None)
+    if png is not None and png.suffix.lower() != '.png':
+        raise InputError('--png', f'figures are PNG files: give a path ending in .png, not {png}')
+    _at_least(args.seed, 0, '--seed')
     scene = load_scene(args.scene)
     if not np.isfinite(args.margin) or args.margin < 0:
         raise InputError('--margin', f'must be a finite clearance >= 0, got {args.margin}')
@@ -118,7 +128,7 @@ def _plan_command(args: argparse.Namespace) -> int:
     print(_describe(scene, result))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result.to_json(), indent=1))
+        args.json.write_text(json.dumps(result.to_json(), indent=1, allow_nan=False))
         print(f'wrote {args.json}')
     if args.png:
         from .figures import plan_figure, save_figure
@@ -127,8 +137,7 @@ def _plan_command(args: argparse.Namespace) -> int:
 
 
 def _drill_command(args: argparse.Namespace) -> int:
-    if args.trials < 1:
-        raise InputError('--trials', f'must be at least 1, got {args.trials}')
+    _at_least(args.trials, 1, '--trials')
     progress = Progress()
     scene, result = _plan(args, progress)
     print(_describe(scene, result))
@@ -142,13 +151,29 @@ def _drill_command(args: argparse.Namespace) -> int:
     print(f'{len(trials) - len(failed)}/{len(trials)} trials reached the goal without collision')
     if args.png:
         from .figures import motion_figure, save_figure
-        worst = min(trials, key=lambda t: t.min_clearance)
-        motion, lock_index, _ = drilled_motion(result, worst.joint, worst.progress)
+        drawn = _trial_to_draw(result, trials)
+        if drawn is None:
+            print(f'ftplan: no drilled motion to draw in {args.png}', file=sys.stderr)
+            return 1
+        (motion, lock_index, _), worst = drawn
+        what = 'a failed trial' if not worst.ok else \
+            f'the drill\'s closest call, {worst.min_clearance:.3f} m'
         title = (f'{scene.robot.joint_names[worst.joint]} locked at {worst.progress:.0%} of '
-                 f'the path (the drill\'s closest call, {worst.min_clearance:.3f} m)')
+                 f'the path ({what})')
         figure = motion_figure(scene, motion, lock_index, worst.joint, title)
         print(f'wrote {save_figure(figure, args.png)}')
     return 0 if not failed else 1
+
+
+def _trial_to_draw(result, trials):
+    """Return (drilled motion, trial): a failed trial's that can be drawn, else the closest call."""
+    failed = [t for t in trials if not t.ok]
+    recovered = sorted((t for t in trials if t.ok), key=lambda t: t.min_clearance)
+    for trial in failed + recovered:
+        motion = drilled_motion(result, trial.joint, trial.progress)
+        if motion is not None:
+            return motion, trial
+    return None
 
 
 def _figure_command(args: argparse.Namespace) -> int:
@@ -166,6 +191,9 @@ def _figure_command(args: argparse.Namespace) -> int:
 
 def _bench_command(args: argparse.Namespace) -> int:
     from .bench import run_benchmark
+    _at_least(args.scenes, 1, '--scenes')
+    _at_least(args.cells, 2, '--cells')
+    _at_least(args.seed, 0, '--seed')
     return run_benchmark(args.scenes, args.seed, args.cells, args.json, Progress())
 
 

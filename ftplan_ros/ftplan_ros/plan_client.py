@@ -42,6 +42,7 @@ from ftplan_msgs_py import (
     DiagnosticReading,
     read_diagnostic_status,
     read_failure_surface,
+    read_joint_state,
     read_joint_trajectory,
     read_path,
 )
@@ -257,13 +258,19 @@ class PlanClient(Node):
             return PlannedMotion(Outcome.TIMED_OUT, f'plan {key} answered, but its latched '
                                  'topics did not all arrive', key, round_trip_s=round_trip,
                                  plan_time_s=plan_time)
+        if isinstance(gathered, str):
+            return PlannedMotion(Outcome.FAILED, f'plan {key}: {gathered}', key,
+                                 round_trip_s=round_trip, plan_time_s=plan_time)
         names, theta_s, trajectory, times, surface, index = gathered
         return PlannedMotion(Outcome.SUCCEEDED, status.message if status else 'plan found',
                              key, names, read_path(response.plan), theta_s, trajectory, times,
                              surface, index, round_trip, plan_time)
 
     def _gather_plan(self, key: str, timeout: float):
-        """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in."""
+        """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in.
+
+        Returns None on timeout, and the reason as a string when they cannot be read.
+        """
         found = []
 
         def complete() -> bool:
@@ -273,14 +280,18 @@ class PlanClient(Node):
                     stamp_key(trajectory.header.stamp) != key:
                 return False
             names = tuple(trajectory.joint_names)
-            positions, times = read_joint_trajectory(trajectory, names)
-            paths = read_failure_surface(surface)
+            try:
+                positions, times = read_joint_trajectory(trajectory, names)
+                paths = read_failure_surface(surface)
+                theta_s = read_joint_state(start, names)
+            except ValueError as error:
+                found.append(f'unreadable plan topics: {error}')
+                return True
             if paths.shape[1:] != positions.shape:
                 return False
             matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
             if len(matches) == 0:
                 return False
-            theta_s = np.array([start.position[list(start.name).index(n)] for n in names])
             found.append((names, theta_s, positions, times, paths, int(matches[0])))
             return True
 
@@ -338,6 +349,8 @@ def _pose(position: Sequence[float] | None, frame_id: str) -> PoseStamped:
     """Make a PoseStamped at `position` [m] in `frame_id`; None gives an empty frame."""
     if position is None:
         return PoseStamped()
+    if len(position) not in (2, 3):
+        raise ValueError(f'a position has 2 or 3 coordinates [m], got {list(position)}')
     xyz = [float(v) for v in position] + [0.0] * (3 - len(position))
     return PoseStamped(header=Header(frame_id=frame_id),
                        pose=Pose(position=Point(x=xyz[0], y=xyz[1], z=xyz[2])))

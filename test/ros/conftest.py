@@ -1,5 +1,7 @@
-"""Fixtures of the ROS tests; the machinery is in ros_support.py (imported first: it sets
-ROS_DOMAIN_ID for this run and worker before rclpy starts)."""
+"""Fixtures of the ROS tests; the machinery is in ros_support.py (imported first: it claims
+a ROS_DOMAIN_ID for this test process before rclpy starts)."""
+
+from pathlib import Path
 
 import pytest
 import rclpy
@@ -27,12 +29,17 @@ def ros_context():
 
 
 @pytest.fixture
-def processes():
-    """Start child processes with processes(args); all are stopped in teardown."""
+def processes(tmp_path):
+    """Start child processes with processes(args); all are stopped in teardown.
+
+    Each one writes its stdout and stderr to files in the test's tmp_path (kept by pytest
+    for the last runs), named after the executable.
+    """
     started: list[Process] = []
 
     def start(args) -> Process:
-        process = Process([str(a) for a in args])
+        args = [str(a) for a in args]
+        process = Process(args, tmp_path / f'{len(started) + 1}-{Path(args[0]).name}')
         started.append(process)
         return process
 

@@ -1,21 +1,21 @@
 """ROS test support: an isolated ROS_DOMAIN_ID, nodes spinning in a daemon thread, a probe.
 
-Every test run and every xdist worker gets its own ROS_DOMAIN_ID (set here, before any
-rclpy.init, and inherited by child processes), so concurrent runs on one host never see
-each other's nodes. Each test gets a fresh rclpy Context: its nodes spin on a
-MultiThreadedExecutor in a daemon thread that the fixture shuts down in teardown.
+Every test process (each xdist worker) claims a ROS_DOMAIN_ID that no other ftplan test
+run or benchmark on this host holds (ros_domain.py; set here, before any rclpy.init, and
+inherited by child processes), so concurrent runs never see each other's nodes. Each test
+gets a fresh rclpy Context: its nodes spin on a MultiThreadedExecutor in a daemon thread
+that the fixture shuts down in teardown.
 Tests wait for things to happen with generous timeouts; none of them asserts a speed.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
+import signal
 import subprocess
 import sys
 import threading
 import time
-import uuid
 from collections.abc import Callable
 from pathlib import Path
 
@@ -26,6 +26,7 @@ from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
+from ros_domain import claim_domain
 
 from ftplan_msgs_py import DiagnosticReading, read_diagnostic_status
 from ftplan_ros.nodes.spinning import BackgroundSpin
@@ -39,18 +40,9 @@ FIG3A = SCENES / 'fig3a.yaml'
 WAIT = 30.0  # [s] how long a test waits for something that should happen soon
 
 
-def _domain_id() -> int:
-    """A domain per test run (xdist's run id, else random) and per worker, in 1..200."""
-    run = os.environ.get('PYTEST_XDIST_TESTRUNUID') or uuid.uuid4().hex
-    worker = os.environ.get('PYTEST_XDIST_WORKER', 'gw0')
-    index = int(worker[2:]) if worker[2:].isdigit() else 0
-    slot = int(hashlib.sha256(run.encode()).hexdigest(), 16) % 50
-    return 1 + (slot * 4 + index) % 200
-
-
 def _isolate() -> None:
-    """Set this run's ROS environment; rclpy reads it at init, so before any test runs."""
-    os.environ['ROS_DOMAIN_ID'] = str(_domain_id())
+    """Set this process's ROS environment; rclpy reads it at init, so before any test runs."""
+    claim_domain()
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     # The installed ROS layout (`make install`), for ament_index and the default scene.
     prefix = f'{INSTALL / "ftplan_ros"}:{INSTALL / "ftplan_msgs_py"}'
@@ -99,13 +91,21 @@ class Probe(Node):
         with self._lock:
             return list(self.messages.get(topic, []))
 
-    def publish(self, msg_type, topic: str, msg, qos=10) -> None:
-        """Publish `msg`, creating the publisher (and waiting for a subscriber) first."""
+    def advertise(self, msg_type, topic: str, qos=10, readers: int = 1) -> None:
+        """Create the publisher of `topic` and wait until `readers` subscribers match it.
+
+        Call it before the moment a test must publish at, so that discovery is done by then.
+        """
         if topic not in self.publishers_:
             self.publishers_[topic] = self.create_publisher(msg_type, topic, qos)
         publisher = self.publishers_[topic]
-        wait_for(lambda: publisher.get_subscription_count() > 0, what=f'a reader of {topic}')
-        publisher.publish(msg)
+        wait_for(lambda: publisher.get_subscription_count() >= readers,
+                 what=f'{readers} readers of {topic}')
+
+    def publish(self, msg_type, topic: str, msg, qos=10) -> None:
+        """Publish `msg`, advertising `topic` first if this probe has not yet."""
+        self.advertise(msg_type, topic, qos)
+        self.publishers_[topic].publish(msg)
 
     def call(self, srv_type, name: str, request, timeout: float = WAIT):
         """Call a service and return its response."""
@@ -161,34 +161,55 @@ def require_install() -> None:
 
 
 class Process:
-    """A child process (an installed node or the bringup) stopped with SIGINT at the end."""
+    """A child process (an installed node or the bringup) stopped with SIGINT at the end.
 
-    def __init__(self, args: list[str]):
+    Its stdout and stderr go to `<logs>.out` and `<logs>.err` (a pipe that nobody reads
+    while it runs could fill up and block it); output() reads what it has written so far.
+    """
+
+    def __init__(self, args: list[str], logs: Path):
         self.args = args
-        self.popen = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                      text=True, env=dict(os.environ), cwd=REPO)
+        self.stdout_path = logs.parent / f'{logs.name}.out'
+        self.stderr_path = logs.parent / f'{logs.name}.err'
+        with open(self.stdout_path, 'w') as out, open(self.stderr_path, 'w') as err:
+            self.popen = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=out,
+                                          stderr=err, env=dict(os.environ), cwd=REPO)
 
     def alive(self) -> bool:
         """Whether the process is still running."""
         return self.popen.poll() is None
 
+    def output(self) -> tuple[str, str]:
+        """Return (stdout, stderr) as written so far."""
+        return (self.stdout_path.read_text(errors='replace'),
+                self.stderr_path.read_text(errors='replace'))
+
+    def wait(self, timeout: float = WAIT) -> tuple[int, str, str]:
+        """Wait for the exit; return (exit code, stdout, stderr). Fail the test on timeout."""
+        try:
+            self.popen.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            out, err = self.output()
+            pytest.fail(f'{self.args[0]} still ran after {timeout} s; killed it.\n'
+                        f'stdout:\n{out[-2000:]}\nstderr:\n{err[-2000:]}')
+        return (self.popen.returncode, *self.output())
+
     def interrupt(self, timeout: float = WAIT) -> tuple[int, str, str]:
-        """Send SIGINT; return (exit code, stdout, stderr) once it has exited."""
-        import signal
+        """Send SIGINT; return (exit code, stdout, stderr) once it has exited (else kill it)."""
         if self.alive():
             self.popen.send_signal(signal.SIGINT)
         try:
-            out, err = self.popen.communicate(timeout=timeout)
+            self.popen.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
-            self.popen.kill()
-            out, err = self.popen.communicate()
-        return self.popen.returncode, out, err
+            self.kill()
+        return (self.popen.returncode, *self.output())
 
     def kill(self) -> None:
         """Make sure the process is gone."""
         if self.alive():
             self.popen.kill()
-        self.popen.communicate()
+        self.popen.wait()
 
 
 def installed(executable: str) -> str:

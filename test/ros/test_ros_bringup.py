@@ -12,8 +12,8 @@ BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
 def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tmp_path):
     png = tmp_path / 'motion.png'
     bringup = processes(BRINGUP + ['--scene', FIG3A, '--drill', 'joint2@0.4', '--png', png])
-    out, err = bringup.popen.communicate(timeout=300)
-    assert bringup.popen.returncode == 0, out + err
+    code, out, err = bringup.wait(timeout=300)
+    assert code == 0, out + err
     assert '1/1 runs reached the goal without collision' in out
     assert 'joint2@0.4' in out and 'recovery time p50' in out
     assert 'plan ' in out.splitlines()[0] and 'theta_s' in out.splitlines()[0]
@@ -25,26 +25,18 @@ def test_bad_input_exits_2_with_one_line(processes):
     for args, problem in [(['--drill', 'joint7@0.4'], "unknown joint 'joint7'"),
                           (['--drill', 'joint1@4'], 'must be in [0, 1]'),
                           (['--trials', '-3'], '--trials')]:
-        bringup = processes(BRINGUP + ['--scene', FIG3A, *args])
-        out, err = bringup.popen.communicate(timeout=120)
-        assert bringup.popen.returncode == 2, (args, out, err)
+        code, out, err = processes(BRINGUP + ['--scene', FIG3A, *args]).wait(timeout=120)
+        assert code == 2, (args, out, err)
         assert problem in err and 'Traceback' not in err
-    missing = processes(BRINGUP + ['--scene', '/nonexistent.yaml'])
-    _, err = missing.popen.communicate(timeout=120)
-    assert missing.popen.returncode == 2 and 'cannot read scene file' in err
+    code, _, err = processes(BRINGUP + ['--scene', '/nonexistent.yaml']).wait(timeout=120)
+    assert code == 2 and 'cannot read scene file' in err
 
 
 def test_ctrl_c_shuts_every_node_down_cleanly(processes):
     bringup = processes(BRINGUP + ['--scene', FIG3A, '--trials', '200', '--seed', '3'])
-    lines: list[str] = []
-
-    def started_runs() -> bool:
-        line = bringup.popen.stderr.readline()
-        lines.append(line)
-        return 'run 1/200' in line or not line
-    wait_for(started_runs, timeout=300, what='the first run')
+    wait_for(lambda: 'run 1/200' in bringup.output()[1] or not bringup.alive(), timeout=300,
+             what='the first run')
     code, out, err = bringup.interrupt()
-    err = ''.join(lines) + err
-    assert code == 130, err
+    assert code == 130, out + err
     assert 'interrupted; shutting the nodes down' in err
     assert 'Traceback' not in err and 'exception' not in err.lower()

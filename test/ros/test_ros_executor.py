@@ -13,6 +13,11 @@ from ftplan_ros.nodes.sim import SimNode
 from ftplan_ros.plan_client import Outcome, PlanClient
 
 STATUS = 'ftplan_executor: execution'
+FAST = 2.0  # [rad/s] the executor's max_joint_speed for most tests
+# For tests that must act while a phase is still running: fig3a's approach to θ_s then
+# takes ~3.5 s and its nominal path ~7 s, so discovery and callbacks on a loaded machine
+# still land in the phase (at FAST the approach is over in ~0.35 s).
+SLOW = 0.2
 
 
 def execution(ros, number):
@@ -25,13 +30,27 @@ def state_of(ros, number, state):
                     what=f'execution {number} {state}')[0]
 
 
-@pytest.fixture
-def suite(ros):
+def start_suite(ros, speed: float):
     """Planner, executor and sim (no injector: the test plays the failures)."""
     ros.make(PlannerNode)
-    ros.make(ExecutorNode, max_joint_speed=2.0)
+    ros.make(ExecutorNode, max_joint_speed=speed)
     ros.make(SimNode, max_joint_speed=4.0)
     return ros
+
+
+@pytest.fixture
+def suite(ros):
+    return start_suite(ros, FAST)
+
+
+@pytest.fixture
+def slow_suite(ros):
+    return start_suite(ros, SLOW)
+
+
+def advertise_locks(ros):
+    """Have the probe's /ftplan/locked_joint publisher matched by the executor and the sim."""
+    ros.probe.advertise(JointState, '/ftplan/locked_joint', readers=2)
 
 
 def plan(ros):
@@ -53,11 +72,13 @@ def execute(ros):
 
 
 def reset(ros):
+    """Repair the arm: the sim's and the executor's locked joints are forgotten."""
     assert ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request()).success
+    assert ros.probe.call(Trigger, '/ftplan_executor/reset', Trigger.Request()).success
 
 
-def test_execute_without_a_plan_or_while_busy_is_refused(suite):
-    ros = suite
+def test_execute_without_a_plan_or_while_busy_is_refused(slow_suite):
+    ros = slow_suite
     response = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
     assert not response.success and 'no plan yet' in response.message
     wait_for(lambda: ros.probe.logged('ftplan_executor', 'execute refused: no plan yet'))
@@ -103,9 +124,10 @@ def test_a_lock_during_no_execution_is_logged_and_ignored(suite):
                                       f'ignored lock of joint3: execution {number} is done'))
 
 
-def test_a_lock_while_approaching_fails_cleanly_and_the_next_run_succeeds(suite):
-    ros = suite
+def test_a_lock_while_approaching_fails_cleanly_and_the_next_run_succeeds(slow_suite):
+    ros = slow_suite
     plan(ros)
+    advertise_locks(ros)
     number = execute(ros)
     state_of(ros, number, 'approaching')
     ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1'))
@@ -113,13 +135,16 @@ def test_a_lock_while_approaching_fails_cleanly_and_the_next_run_succeeds(suite)
     assert 'before the failure-tolerant nominal path' in failed.values['reason']
     assert failed.level == 'ERROR'
     wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint1 locked while approaching'))
+    refused = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert not refused.success and "['joint1'] locked in execution" in refused.message
     reset(ros)
     assert state_of(ros, execute(ros), 'done')
 
 
-def test_a_lock_during_the_nominal_phase_is_recovered_by_the_core(suite):
-    ros = suite
+def test_a_lock_during_the_nominal_phase_is_recovered_by_the_core(slow_suite):
+    ros = slow_suite
     motion = plan(ros)
+    advertise_locks(ros)
     number = execute(ros)
     wait_for(lambda: [s for s in execution(ros, number)
                       if s.values['state'] == 'nominal' and float(s.values['progress']) > 0.3])

@@ -69,9 +69,13 @@ def test_lock_now_publishes_one_event_and_clears_itself(ros):
 def test_a_drill_in_seconds_at_the_start_locks_during_the_approach(ros):
     """joint1@0.0s fires as the execution starts: the executor fails it, nobody crashes."""
     ros.make(PlannerNode)
-    ros.make(ExecutorNode, max_joint_speed=2.0)
+    # Slow enough (the approach to θ_s takes ~3.5 s) that the injector, which learns of
+    # the start from the executor's status, locks joint1 before the approach is over.
+    ros.make(ExecutorNode, max_joint_speed=0.2)
     ros.make(SimNode, max_joint_speed=4.0)
-    ros.make(InjectorNode, drills=['joint1@0.0s', 'joint2@0.5'])
+    injector = ros.make(InjectorNode, drills=['joint1@0.0s', 'joint2@0.5'])
+    wait_for(lambda: injector.lock_publisher.get_subscription_count() >= 2,
+             what='the executor and the sim to read /ftplan/locked_joint')
     client = PlanClient(context=ros.context)
     try:
         motion = client.plan(goal=(1.0, 0.0), start=(2.0, 0.0), timeout=60.0)
@@ -80,6 +84,7 @@ def test_a_drill_in_seconds_at_the_start_locks_during_the_approach(ros):
         assert first.result is Outcome.FAILED
         assert 'locked while approaching' in first.message
         assert client.trigger('/ftplan_sim/reset')[0]
+        assert client.trigger('/ftplan_executor/reset')[0]
         second = client.execute(motion, timeout=60.0)
     finally:
         client.destroy_node()

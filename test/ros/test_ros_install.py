@@ -92,7 +92,6 @@ def test_four_installed_nodes_drill_across_processes(ros_context, processes):
 def test_a_bad_scene_file_stops_the_node_with_exit_code_2(processes):
     planner = processes([installed('planner'), '--ros-args', '-p',
                          'scene_file:=/nonexistent/scene.yaml'])
-    planner.popen.wait(timeout=60.0)
-    _, err = planner.popen.communicate()
-    assert planner.popen.returncode == 2
+    code, _, err = planner.wait(timeout=60.0)
+    assert code == 2
     assert 'cannot start' in err and '/nonexistent/scene.yaml' in err

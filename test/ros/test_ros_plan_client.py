@@ -46,5 +46,6 @@ def test_a_plan_comes_back_as_one_result(ros):
     assert np.array_equal(motion.surface[motion.nominal_index], motion.trajectory)
     assert np.all(np.diff(motion.times) > 0)
     assert np.allclose(motion.path[0, :2], [2.0, 0.0]) and motion.round_trip_s > 0
+    assert np.linalg.norm(motion.path[-1, :2] - [1.0, 0.0]) <= 0.02   # the tolerance asked
     assert motion.plan_time_s > 0
     wait_for(lambda: ros.probe.logged('ftplan_planner', 'plan found'))

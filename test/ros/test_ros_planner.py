@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from geometry_msgs.msg import Point, Pose, PoseStamped, Vector3
 from nav_msgs.srv import GetPlan
-from ros_support import FIG3A, wait_for
+from ros_support import FIG3A, SCENES, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, Header
 from trajectory_msgs.msg import JointTrajectory
@@ -93,13 +93,19 @@ def test_a_plan_is_answered_and_published_latched_and_consistent(planner):
     assert status.level == 'OK' and status.values['stamp'] == stamp
 
 
-def test_an_empty_start_frame_plans_from_the_latest_joint_state(planner):
-    ros = planner
+def test_an_empty_start_frame_plans_from_the_latest_joint_state(ros):
+    """The scene's task starts at x_s = (2.5, 0); the joint state puts the hand at (2, 0)."""
+    scene_file = SCENES / 'paper_c_free.yaml'
+    ros.make(PlannerNode, scene_file)
+    scene = load_scene(scene_file)
+    hand = scene.robot.forward_kinematics(np.array(AT_START))
+    assert np.linalg.norm(hand - scene.task.start) > 0.4
     ros.probe.publish(JointState, '/joint_states', create_joint_state(NAMES, AT_START))
     wait_for(lambda: [s for s in ros.probe.statuses('ftplan_planner: joint_states')],
              what='the planner to take the joint state')
-    response = plan_ok(ros, request(start=PoseStamped()))
-    assert np.allclose(read_path(response.plan)[0, :2], [2.0, 0.0], atol=1e-9)
+    path = read_path(plan_ok(ros, request(start=PoseStamped())).plan)
+    assert np.allclose(path[0, :2], hand, atol=1e-9)
+    assert np.allclose(path[-1, :2], [1.0, 0.0], atol=0.01)
 
 
 def _nan_joint_state(ros):

@@ -103,6 +103,7 @@ def test_fcl_box_distances_match_a_dense_point_sampling(rng):
     checker = CollisionChecker(ARM, [Obstacle('box', tuple(center), size=size)])
     assert checker.backend == 'fcl'
     t = np.linspace(0.0, 1.0, 2001)[:, None]
+    separated = touching = 0
     for theta in rng.uniform(-np.pi, np.pi, (40, 3)):
         clearance = checker.clearance(theta[None])[0]
         for j, (a, b) in enumerate(ARM.link_segments(theta)):
@@ -110,6 +111,11 @@ def test_fcl_box_distances_match_a_dense_point_sampling(rng):
             if sampled > 1e-3:  # separated: fcl must agree with the sampling to its spacing
                 assert clearance[j] == pytest.approx(sampled, abs=1e-3)
                 assert clearance[j] <= sampled  # the sampled minimum can only be higher
+                separated += 1
+            else:  # a sample touches the box: so must fcl's link
+                assert clearance[j] <= 1e-3
+                touching += 1
+    assert separated >= 100 and touching >= 1  # both branches ran, on most of the 120 links
 
 
 def test_a_sphere_centred_on_the_point_is_answered():

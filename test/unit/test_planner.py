@@ -37,7 +37,12 @@ def test_obstacle_free_paper_task_is_feasible_and_reported():
     assert np.all(lower <= result.nominal_path.min(axis=0) + 1e-12)
     assert np.all(upper >= result.nominal_path.max(axis=0) - 1e-12)
     stats = result.stats
-    assert stats['collision_checks'] >= 0 and stats['plan_time_s'] > 0
+    # Every clearance the planner computed is counted: at least the points of the traced
+    # self-motion manifolds (Step 2) and the self-check's samples of S_F.
+    traced = sum(len(b.points) for b in result.start_manifolds + result.goal_manifolds)
+    assert traced > 0 and stats['clearance_samples'] > 0
+    assert stats['collision_checks'] >= traced + stats['clearance_samples']
+    assert stats['plan_time_s'] > 0
     assert stats['criterion'] and stats['theta_S'] <= stats['start_candidates']
 
 

@@ -13,7 +13,7 @@ REPO = Path(__file__).resolve().parents[2]
 def test_ruff_is_clean():
     run = subprocess.run([sys.executable, '-m', 'ruff', 'check', 'ftplan_ros', 'ftplan_msgs_py',
                           'test', 'benchmarks', 'tools'], cwd=REPO, capture_output=True,
-                         text=True)
+                         text=True, timeout=300)
     assert run.returncode == 0, run.stdout + run.stderr
 
 
@@ -26,7 +26,7 @@ def test_the_core_and_the_cli_never_import_rclpy():
             'ros = ("rclpy", "rosidl_runtime_py")\n'
             'print(sorted(m for m in sys.modules if m.split(".")[0] in ros))\n')
     run = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                         cwd=REPO)
+                         cwd=REPO, timeout=300)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == '[]'
     assert len(modules) > 12

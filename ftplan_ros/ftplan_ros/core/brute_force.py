@@ -64,11 +64,15 @@ def possibly_free(checker: CollisionChecker, centers: np.ndarray, half_width: np
 
 
 def possibly_goal(robot: Robot, x: np.ndarray, centers: np.ndarray, half_width: np.ndarray,
-                  ) -> np.ndarray:
-    """Mark (bool, ...) cells where a configuration within `half_width` (n,) [rad] may reach x."""
+                  tolerance: float = 0.0) -> np.ndarray:
+    """Mark (bool, ...) cells where a configuration within `half_width` (n,) [rad] may reach x.
+
+    Reaching means coming within `tolerance` [m] of x (m,) [m].
+    """
     flat = centers.reshape(-1, centers.shape[-1])
     error = np.linalg.norm(robot.forward_kinematics(flat) - x, axis=1)
-    return (error <= robot.tip_lever_arms() @ half_width).reshape(centers.shape[:-1])
+    reach = robot.tip_lever_arms() @ half_width + tolerance
+    return (error <= reach).reshape(centers.shape[:-1])
 
 
 def label_periodic(mask: np.ndarray, periodic: np.ndarray) -> np.ndarray:
@@ -94,12 +98,14 @@ def label_periodic(mask: np.ndarray, periodic: np.ndarray) -> np.ndarray:
 
 def recoverable_in_plane(checker: CollisionChecker, theta: np.ndarray, joint: int,
                          x_goal: np.ndarray, cells_per_joint: int,
-                         extra_goals: np.ndarray | None = None) -> bool:
+                         extra_goals: np.ndarray | None = None,
+                         goal_tolerance: float = 0.0) -> bool:
     """Whether the arm at θ (n,) [rad] may reach x_g with `joint` locked: a flood fill in H_i.
 
     The failure plane θ_joint = θ[joint] is gridded over the other joints; the fill
     starts from θ's cell. `extra_goals` (g, n) [rad] are exact goal configurations in the
-    plane (e.g. from exact inverse kinematics) whose cells count as goals too.
+    plane (e.g. from exact inverse kinematics) whose cells count as goals too; a cell
+    that may come within `goal_tolerance` [m] of x_g is a goal.
     """
     robot = checker.robot
     free_joints = [j for j in range(robot.n_joints) if j != joint]
@@ -113,7 +119,7 @@ def recoverable_in_plane(checker: CollisionChecker, theta: np.ndarray, joint: in
     half = 0.5 * grid.step
     half[joint] = 0.0  # the locked joint is exact
     free = possibly_free(checker, centers, half)
-    goal = possibly_goal(robot, x_goal, centers, half) & free
+    goal = possibly_goal(robot, x_goal, centers, half, goal_tolerance) & free
     for exact in [] if extra_goals is None else extra_goals:
         goal[plane.cell_of(exact[free_joints])] = True
     labels = label_periodic(free, plane.periodic)

@@ -159,11 +159,17 @@ def _nearest_support(obstacle: Obstacle, direction: np.ndarray) -> float:
 
 
 def point_clearance(obstacles: Sequence[Obstacle], point: np.ndarray) -> np.ndarray:
-    """Distance (P,) [m] from a point (3,) to each obstacle (a lower bound); 0 within 1 cm."""
+    """Distance (P,) [m] from a point (3,) to each obstacle, 0 inside.
+
+    Exact for spheres; for other shapes a lower bound from fcl, 0 within about 1 cm.
+    """
     point = np.asarray(point, dtype=float)
     probe = fcl.CollisionObject(fcl.Capsule(_FCL_PADDED_RADIUS, 1e-6), fcl.Transform(point))
-    return np.array([certified_distance(probe, point, point, 0.0, ob, _fcl_obstacle(ob),
-                                        _FCL_PADDED_RADIUS) for ob in obstacles])
+    return np.array([
+        max(0.0, float(np.linalg.norm(point - np.asarray(ob.center))) - ob.radius)
+        if ob.shape == 'sphere' else
+        certified_distance(probe, point, point, 0.0, ob, _fcl_obstacle(ob), _FCL_PADDED_RADIUS)
+        for ob in obstacles])
 
 
 def _fcl_obstacle(obstacle: Obstacle) -> fcl.CollisionObject:

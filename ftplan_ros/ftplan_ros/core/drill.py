@@ -103,6 +103,6 @@ def summarize_drill(trials: Sequence[DrillTrial], joint_names: Sequence[str]) ->
         spread = (f'{np.percentile(lengths, 50):.3f} / {np.percentile(lengths, 95):.3f}'
                   if len(lengths) else '-')
         rows.append(f'{name:<10}{len(group):>7}{sum(t.ok for t in group):>9}'
-                    f'{min(t.min_clearance for t in group):>15.4f}'
-                    f'{max(t.goal_error for t in group):>18.2e}{spread:>24}')
+                    f'{np.nanmin([t.min_clearance for t in group]):>15.4f}'
+                    f'{np.nanmax([t.goal_error for t in group]):>18.2e}{spread:>24}')
     return '\n'.join(rows)

@@ -156,7 +156,8 @@ def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
     every hit; goal points are the arc points inside it, thinned to about
     `column_spacing` [rad] apart, plus the exact hits, one per joint. Paths get enough
     waypoints that neighbours are at most `waypoint_spacing` [rad] apart in every joint.
-    The nominal path is the one to the goal point nearest the window's middle.
+    The nominal path is the one to the goal point nearest the window's middle (the
+    planner then replaces it by its own choice, the clearest path).
     """
     first, last = window
     inside = np.arange(int(np.ceil(first)), int(np.floor(last)) + 1)

@@ -3,11 +3,12 @@
 For one degree of redundancy (r = n - m = 1) the pre-image f^{-1}(x) is a union of curves
 (paper eq. 1). Each curve is traced by null-space continuation: a predictor step along the
 null vector of the Jacobian, a corrector that solves f(θ) = x on the hyperplane orthogonal
-to it, and step control. Seeds come from inverse-kinematics samples, so every connected
-branch is found; a branch that returns to its seed (on the torus of periodic joints) is a
-closed loop. Where branches cross at a singular configuration (x a critical value of f, as
-the paper's x_g = [1, 0]), continuation passes straight through and each branch is kept
-as its own curve.
+to it, and step control. Seeds come from inverse-kinematics samples (48 random starting
+points by default): a branch is missed only if no sample converges onto it, and the tests
+compare the branches with exact inverse kinematics in every failure plane. A branch that
+returns to its seed (on the torus of periodic joints) is a closed loop. Where branches
+cross at a singular configuration (x a critical value of f, as the paper's x_g = [1, 0]),
+continuation passes straight through and each branch is kept as its own curve.
 
 Configurations are (n,) [rad]; a branch's points are lifted (continuous across ±π).
 """

@@ -147,7 +147,7 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
                          checker, options, report)
         stats.update(search.stats, start_candidates=len(candidates),
                      candidate_subdivisions=subdivisions or 1)
-        if search.surface is not None or not arcs or len(candidates) == 0:
+        if search.surface is not None or not arcs:
             break
         report(f'no plan from {len(candidates)} starts; trying starts between them')
     stats['collision_checks'] = checker.checks

@@ -24,6 +24,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from .errors import InputError
 from .failure_surface import FailureSurface
+from .paths import path_length
 
 # Each triangle offers up to 7 node slots: 3 vertices, 3 edge crossings and the start.
 _SLOT_PAIRS = np.array(list(combinations(range(7), 2)))
@@ -44,7 +45,7 @@ class RecoveryPath:
     @property
     def length(self) -> float:
         """Joint-space length [rad] of the path."""
-        return float(np.sum(np.linalg.norm(np.diff(self.path, axis=0), axis=1)))
+        return path_length(self.path)
 
 
 def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: int,
@@ -52,10 +53,13 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
     """Find the segment w and point (n,) [rad] of the nominal path where joint `joint` = θ_joint.
 
     Among the nominal segments that reach the locked value, the point nearest θ is taken;
-    it must lie within `max_offset` [rad] of θ, or θ is not on the nominal path.
+    it must lie within `max_offset` [rad] of θ, or θ is not on the nominal path. A locked
+    value up to `max_offset` past either end of the path's range counts as that end.
     """
     path = surface.nominal_path
-    level = theta[joint]
+    level = float(np.clip(theta[joint], path[:, joint].min(), path[:, joint].max()))
+    if abs(level - theta[joint]) > max_offset:
+        level = theta[joint]  # out of range: reported below
     a, b = path[:-1], path[1:]
     reaches = (np.minimum(a[:, joint], b[:, joint]) <= level) & \
         (level <= np.maximum(a[:, joint], b[:, joint]))
@@ -94,8 +98,8 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     if theta.shape != (n_joints,) or not np.all(np.isfinite(theta)):
         raise InputError('theta', f'must be {n_joints} finite angles')
     segment, start = locate_on_nominal_path(surface, theta, joint, max_offset)
-    level = float(theta[joint])
-    points, graph, targets = _slice_graph(surface, joint, level, segment, start)
+    # S_F is sliced at the locked value moved into the path's range (by at most max_offset).
+    points, graph, targets = _slice_graph(surface, joint, float(start[joint]), segment, start)
     source = len(points) - 1
     distance, predecessor = dijkstra(graph, directed=False, indices=source,
                                      return_predecessors=True)
@@ -107,6 +111,7 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     while route[-1] != source:
         route.append(predecessor[route[-1]])
     path = np.vstack([theta[None, :], points[route[::-1]]])
+    level = float(theta[joint])
     path[:, joint] = level
     return RecoveryPath(joint, level, path)
 

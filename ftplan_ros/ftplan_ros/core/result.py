@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,7 +62,11 @@ class PlanResult:
         return failure_hypercube(self.surface.theta_s, self.surface.goal_points)
 
     def to_json(self) -> dict:
-        """Return the plan result JSON of CONTRACT.md (radians)."""
+        """Return the plan result JSON of CONTRACT.md (radians).
+
+        A statistic that is not finite (the clearance of a scene without obstacles is
+        infinite) is null: JSON has no infinity.
+        """
         out: dict = {'feasible': self.feasible, 'joint_names': list(self.joint_names)}
         if self.surface is not None:
             lower, upper = self.hypercube
@@ -72,7 +77,8 @@ class PlanResult:
                 'failure_plane_hits': self.failure_plane_hits.tolist(),
                 'hypercube': {'lower': lower.tolist(), 'upper': upper.tolist()},
             })
-        out['stats'] = self.stats
+        out['stats'] = {key: None if isinstance(value, float) and not math.isfinite(value)
+                        else value for key, value in self.stats.items()}
         if not self.feasible:
             out['reason'] = self.reason
         return out

@@ -19,6 +19,9 @@ from .errors import InputError
 from .robot import PlanarChain
 
 OBSTACLE_TYPES = ('sphere', 'box', 'cylinder')
+# [m or rad] Largest magnitude of any number: the clearance bounds allow for float rounding
+# of about 1e-6 m, which holds for coordinates up to here (and a scene is not bigger).
+LARGEST_NUMBER = 1.0e6
 
 
 @dataclass(frozen=True)
@@ -74,6 +77,8 @@ def load_scene(path: str | Path) -> Scene:
         text = path.read_text()
     except OSError as error:
         raise InputError(str(path), f'cannot read scene file ({error.strerror})') from None
+    except UnicodeDecodeError:
+        raise InputError(str(path), 'is not UTF-8 text') from None
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as error:
@@ -109,7 +114,7 @@ def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None) -
 def _robot_file(path: Path) -> Any:
     try:
         data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as error:
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
         raise InputError('robot', f'cannot read robot file {path.name}: {error}') from None
     data = _mapping(data, f'robot file {path.name}')
     _check_keys(data, f'robot file {path.name}', required=('robot',), optional=())
@@ -267,9 +272,14 @@ def _check_keys(data: Mapping, where: str, required: tuple, optional: tuple) -> 
 def _number(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(where, f'must be a number, got {value!r}')
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:
+        value = math.inf
     if not math.isfinite(value):
         raise InputError(where, f'must be finite, got {value}')
+    if abs(value) > LARGEST_NUMBER:
+        raise InputError(where, f'must be within ±{LARGEST_NUMBER:g}, got {value:g}')
     return value
 
 

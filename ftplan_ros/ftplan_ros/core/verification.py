@@ -19,6 +19,7 @@ proof has three parts, each checked here rather than trusted:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -42,6 +43,13 @@ class VerificationOptions:
     max_depth: int = 7            # splits of a simplex before giving up on certifying it
     chord_samples: int = 8        # samples per goal-row chord for the goal-error bound
     recovery_moments: int = 5     # sampled moments of the nominal path for explicit recovery
+
+    def __post_init__(self):
+        if not math.isfinite(self.margin) or self.margin < 0.0:
+            raise ValueError(f'margin must be a finite clearance >= 0 [m], got {self.margin}')
+        for name, least in (('max_depth', 0), ('chord_samples', 1), ('recovery_moments', 2)):
+            if getattr(self, name) < least:
+                raise ValueError(f'{name} must be >= {least}, got {getattr(self, name)}')
 
 
 @dataclass(frozen=True)
@@ -75,12 +83,12 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
         clearance = checker.clearance(centroids)  # (S, L)
         samples += len(centroids)
         smallest = min(smallest, float(clearance.min()))
-        hit = np.flatnonzero(np.any(clearance <= margin, axis=1))
+        hit = np.flatnonzero(np.any(~(clearance > margin), axis=1))  # NaN counts as a hit
         if len(hit):
             return False, int(roots[hit[0]]), float(smallest), samples
         spread = np.max(np.abs(corners - centroids[:, None, :]), axis=1)  # (S, n)
         motion = spread @ arms.T  # (S, L): how far each link can move inside the simplex
-        open_ = np.flatnonzero(np.any(clearance - margin <= motion + _ROUNDING, axis=1))
+        open_ = np.flatnonzero(np.any(~(clearance - margin > motion + _ROUNDING), axis=1))
         corners, roots = _split(corners[open_]), np.repeat(roots[open_], _pieces(corners))
     if len(corners) == 0:
         return True, -1, float(smallest), samples
@@ -132,7 +140,7 @@ def certify_surface(surface: FailureSurface, checker: CollisionChecker, x_goal: 
     if problem:
         return Verdict(False, problem)
     error = goal_row_error(checker.robot, x_goal, surface.goal_points, options.chord_samples)
-    if error > goal_tolerance:
+    if not error <= goal_tolerance:  # NaN fails too
         return Verdict(False, f'the goal row strays {error:.4f} m from x_g '
                        f'(tolerance {goal_tolerance} m)', max_goal_error=error)
     corners = surface.vertices[surface.triangles]
@@ -170,7 +178,7 @@ def check_recoveries(surface: FailureSurface, checker: CollisionChecker, x_goal:
             clear, _, lowest, count = certify_simplices(checker, segments, options.margin,
                                                         options.max_depth)
             samples += count
-            if not clear or arrival > goal_tolerance:
+            if not clear or not arrival <= goal_tolerance:
                 why = 'collides' if not clear else f'ends {arrival:.4f} m from x_g'
                 return replace(certified, ok=False, clearance_samples=samples,
                                reason=f'{where}: the recovery path {why}')

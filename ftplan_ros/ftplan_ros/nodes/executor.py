@@ -15,6 +15,11 @@ the S_F web; the nominal path is the web path equal to the trajectory). A call o
    for the path in S_F ∩ H_i from that configuration to M_g^F and commands it;
 4. done (at the goal) or failed (with the reason).
 
+An execution is refused while a joint that locked in an earlier one has not been
+declared repaired (`~/reset`, std_srvs/Trigger: the approach would command it), and when
+the current obstacles (scene and /ftplan/obstacles) touch a vertex of the plan's S_F:
+the obstacles changed since the plan, so plan again.
+
 Commands go out on /ftplan/joint_command as JointTrajectory (strictly increasing times,
 the first point one step ahead of where the arm is), so a ros2_control
 joint_trajectory_controller can take them (remap the topic); an empty trajectory asks
@@ -75,6 +80,7 @@ from .topics import (
     JOINT_STATES,
     LOCKED_JOINT,
     OBSTACLES,
+    RESET_SERVICE,
     START_CONFIGURATION,
     TRAJECTORY,
 )
@@ -173,6 +179,7 @@ class ExecutorNode(Node):
         self.plan: HeldPlan | None = None
         self.execution: Execution | None = None
         self.executions = 0
+        self.locked_joints: set[int] = set()  # locked in an execution, not yet repaired
         self.q: np.ndarray | None = None
         self._previous_q: np.ndarray | None = None
         self._obstacles = ObstacleSet(self.scene.frame_id)
@@ -197,6 +204,7 @@ class ExecutorNode(Node):
             Float64MultiArray, FAILURE_SURFACE, self.failure_surface_callback, LATCHED_QOS)
         self.execute_service = self.create_service(
             Trigger, EXECUTE_SERVICE, self.execute_callback)
+        self.reset_service = self.create_service(Trigger, RESET_SERVICE, self.reset_callback)
         rate = float(self.get_parameter('status_rate').value)
         self.status_timer = self.create_timer(1.0 / rate, self.status_callback)
         self.report_status('waiting for a plan')
@@ -267,11 +275,37 @@ class ExecutorNode(Node):
             self.diagnostics.rejected('input', f'execute refused: {response.message}')
         return response
 
+    def reset_callback(self, request: Trigger.Request, response: Trigger.Response,
+                       ) -> Trigger.Response:
+        """Declare the locked joints repaired, so that executions may start again."""
+        if self.state in ACTIVE:
+            response.success = False
+            response.message = f'execution {self.execution.number} is {self.state.value}'
+            self.diagnostics.rejected('input', f'reset refused: {response.message}')
+            return response
+        repaired = [self.names[j] for j in sorted(self.locked_joints)]
+        self.locked_joints.clear()
+        response.success = True
+        response.message = f'repaired: {repaired}' if repaired else 'no joint was locked'
+        self.report_status(f'reset: {response.message}', log=True)
+        return response
+
     def _start_execution(self) -> tuple[bool, str]:
         if self.state in ACTIVE:
             return False, f'execution {self.execution.number} is still {self.state.value}'
         if self.plan is None:
             return False, 'no plan yet: call the plan service (/ftplan/plan) first'
+        if self.locked_joints:
+            locked = [self.names[j] for j in sorted(self.locked_joints)]
+            return False, (f'{locked} locked in execution {self.execution.number} and would be '
+                           f'commanded: call {self.get_name()}/reset once repaired')
+        obstacles = self._obstacles.scene(self.scene).obstacles
+        if obstacles:
+            clearance = CollisionChecker(self.scene.robot, obstacles).min_clearance(
+                self.plan.surface.vertices).min()
+            if clearance <= 0.0:
+                return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
+                               'surface now meets one; plan again')
         self.executions += 1
         self.execution = Execution(self.executions, self.plan, self.plan.surface,
                                    time.monotonic(),
@@ -419,6 +453,7 @@ class ExecutorNode(Node):
             self.diagnostics.rejected('input', f'ignored lock of {event.name}: {what}',
                                       {'joint': event.name, 'state': self.state.value})
             return
+        self.locked_joints.add(joint)
         if self.state == State.APPROACHING:
             self._stop()
             ex.locked_joint, ex.lock_received = joint, time.monotonic()
@@ -512,6 +547,8 @@ class ExecutorNode(Node):
                 values['goal_error_m'] = ex.goal_error
             if ex.reason:
                 values['reason'] = ex.reason
+        if self.locked_joints:
+            values['locked_joints'] = ','.join(self.names[j] for j in sorted(self.locked_joints))
         self.diagnostics.report('execution', level, message, values, log=log)
 
 

@@ -48,6 +48,7 @@ from .params import (
     declare,
     declare_array,
     declare_scene,
+    non_negative,
 )
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
 from .reporting import Diagnostics
@@ -122,6 +123,7 @@ class InjectorNode(Node):
         validators = {
             'drills': self._check_drills,
             'random_drills': lambda v: None if v >= -1 else f'must be >= -1, got {v}',
+            'seed': non_negative,
             'lock_now': lambda v: None if v in ('', *self.names) else
             f'unknown joint {v!r}; the arm has {self.names}',
         }
@@ -138,7 +140,8 @@ class InjectorNode(Node):
         self.pending = False
         self.nominal: np.ndarray | None = None
         self._drill_timer = None
-        self._clear_timer = None
+        self._lock_now_clearer = self.create_timer(0.0, self._clear_lock_now)
+        self._lock_now_clearer.cancel()
 
         self.lock_publisher = self.create_publisher(JointState, LOCKED_JOINT, EVENT_QOS_DEPTH)
         self.status_subscription = self.create_subscription(
@@ -177,11 +180,10 @@ class InjectorNode(Node):
         if 'lock_now' in names and lock:
             self.publish_lock(lock, 'manual lock_now')
             # Clear it outside this callback: parameters cannot be set from in here.
-            self._clear_timer = self.create_timer(0.0, self._clear_lock_now)
+            self._lock_now_clearer.reset()
 
     def _clear_lock_now(self) -> None:
-        self.destroy_timer(self._clear_timer)
-        self._clear_timer = None
+        self._lock_now_clearer.cancel()
         self.set_parameters([Parameter('lock_now', value='')])
 
     # Inputs -------------------------------------------------------------------------

@@ -31,6 +31,7 @@ from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, Header
 from trajectory_msgs.msg import JointTrajectory
@@ -100,12 +101,16 @@ class PlannerNode(Node):
         declare(self, 'margin', 0.0,
                 'Clearance [m] the guarantee keeps from every obstacle.')
         declare(self, 'seed', 0,
-                'Seed of the inverse-kinematics samples: the same request gives the same plan.')
+                'Seed of the inverse-kinematics samples: the same request gives the same '
+                'plan (a new seed clears the cache of traced manifolds).')
         declare(self, 'joint_space_frame', DEFAULT_JOINT_SPACE_FRAME,
                 'Frame of the joint-space markers (x, y, z = joint 1, 2, 3 angles [rad]).')
-        validators = {'max_joint_speed': positive, 'margin': non_negative}
+        validators = {'max_joint_speed': positive, 'margin': non_negative,
+                      'seed': non_negative,
+                      'joint_space_frame': lambda v: None if v else 'must not be empty'}
         check_startup_parameters(self, validators)
         add_validators(self, validators)
+        self.add_post_set_parameters_callback(self._parameters_set)
 
         self.cache = ManifoldCache()
         self.diagnostics = Diagnostics(self)
@@ -144,8 +149,18 @@ class PlannerNode(Node):
 
     # Inputs -------------------------------------------------------------------------
 
+    def _parameters_set(self, parameters: list[Parameter]) -> None:
+        """Start a new cache on a new seed: the cached manifolds were traced with the old one."""
+        if any(p.name == 'seed' for p in parameters):
+            self.cache = ManifoldCache()
+
     def joint_state_callback(self, msg: JointState) -> None:
-        """Keep the latest joint configuration; a bad one makes the start unknown."""
+        """Keep the latest joint configuration; a bad one makes the start unknown.
+
+        Messages that name none of the arm's joints (a gripper's, say) are not the arm's.
+        """
+        if not set(msg.name) & set(self.scene.robot.joint_names):
+            return
         try:
             q = read_joint_state(msg, self.scene.robot.joint_names)
         except ValueError as error:
@@ -359,7 +374,7 @@ def plan_markers(scene: Scene, result: PlanResult, stamp, joint_space_frame: str
         shapes = [shape_from_obstacle(('obstacles', k), obstacle)
                   for k, obstacle in enumerate(scene.obstacles)]
         markers.markers.extend(
-            create_obstacle_markers(shapes, scene.frame_id, stamp).markers)
+            create_obstacle_markers(shapes, scene.frame_id, stamp, clear_first=False).markers)
     return markers
 
 

@@ -64,8 +64,8 @@ from .topics import (
     JOINT_STATES,
     LOCKED_JOINT,
     OBSTACLES,
+    RESET_SERVICE,
     SIM_NODE,
-    SIM_RESET_SERVICE,
 )
 
 _LOCK_SNAP_TOLERANCE = 1e-9  # [rad]
@@ -166,7 +166,7 @@ class SimNode(Node):
             JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
         self.obstacle_subscription = self.create_subscription(
             MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
-        self.reset_service = self.create_service(Trigger, SIM_RESET_SERVICE,
+        self.reset_service = self.create_service(Trigger, RESET_SERVICE,
                                                  self.reset_callback)
         self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
         self.sim_time = 0.0  # [s] advanced by 1/rate each tick

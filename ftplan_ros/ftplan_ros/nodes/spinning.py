@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 import threading
+import traceback
 from collections.abc import Callable, Sequence
 
 import rclpy
@@ -33,6 +34,7 @@ from rclpy.node import Node
 from .params import STARTUP_ERRORS
 
 MIN_THREADS = 4
+_log = rclpy.logging.get_logger('ftplan_spin')
 _STOP_POLL = 0.1  # [s] longest wait of a BackgroundSpin before it looks for a stop
 
 
@@ -50,6 +52,17 @@ class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
         """Leave QoS event handlers out of the wait set (the first busy loop above)."""
         return not isinstance(entity, EventHandler) and super().can_execute(entity)
 
+    def spin_once(self, timeout_sec: float | None = None) -> None:
+        """Run one callback, like rclpy; one that raised is logged and spinning goes on.
+
+        rclpy re-raises a callback's exception from `spin_once`, which ends `spin()` and
+        with it every node of the process: one bad message must not do that.
+        """
+        try:
+            super().spin_once(timeout_sec)
+        except Exception:  # noqa: BLE001 - any callback's failure, logged in full
+            _log.error(f'a callback raised; the nodes keep spinning:\n{traceback.format_exc()}')
+
     def shutdown(self, timeout_sec: float | None = None) -> bool:
         """Shut down after `spin` has returned: first run every handler already handed out.
 
@@ -62,8 +75,7 @@ class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
         self._executor.shutdown(wait=True)
         for handler in self._futures:
             if handler.done() and handler.exception() is not None:
-                rclpy.logging.get_logger('ftplan_executor').error(
-                    f'a callback failed: {handler.exception()!r}')
+                _log.error(f'a callback raised: {handler.exception()!r}')
         self._futures.clear()
         return super().shutdown(timeout_sec)
 

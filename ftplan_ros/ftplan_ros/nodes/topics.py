@@ -11,7 +11,7 @@ LOCKED_JOINT = '/ftplan/locked_joint'
 EXECUTE_SERVICE = '/ftplan/execute'
 JOINT_COMMAND = '/ftplan/joint_command'
 DIAGNOSTICS = '/diagnostics'
-SIM_RESET_SERVICE = '~/reset'
+RESET_SERVICE = '~/reset'  # sim and executor: forget the locked joints
 
 PLANNER_NODE = 'ftplan_planner'
 EXECUTOR_NODE = 'ftplan_executor'

@@ -1,0 +1,101 @@
+"""Edge cases of input and options that once crashed, passed NaN or rejected a good scene."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from ftplan_testing import SCENES
+
+from ftplan_ros.core import load_scene, plan, recover
+from ftplan_ros.core.scene import parse_scene
+from ftplan_ros.core.verification import VerificationOptions
+
+ARM = {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]}
+TASK = {'start': [2.0, 0.0], 'goal': [1.0, 0.0]}
+
+
+def ftplan(*args):
+    return subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', *map(str, args)],
+                          capture_output=True, text=True, timeout=300)
+
+
+def one_line_error(run, field):
+    """The CLI's bad-input answer: exit 2 and one line naming the field, no traceback."""
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('ftplan: error: ') and field in lines[0], \
+        run.stderr
+
+
+def test_a_scene_that_is_not_utf8_is_one_line_of_error(tmp_path):
+    scene = tmp_path / 'latin1.yaml'
+    scene.write_bytes('robot: {type: planar}  # café\n'.encode('latin-1'))
+    one_line_error(ftplan('plan', scene), 'UTF-8')
+
+
+def test_a_number_too_big_for_a_float_is_one_line_of_error(tmp_path):
+    scene = tmp_path / 'big.yaml'
+    scene.write_text(f'robot: {{type: planar, link_lengths: [1.0, 1{"0" * 400}, 1.0]}}\n')
+    one_line_error(ftplan('plan', scene), 'robot.link_lengths[1]')
+
+
+def test_numbers_beyond_the_rounding_allowance_are_refused():
+    with pytest.raises(ValueError, match=r'obstacles\[0\].radius'):
+        parse_scene({'robot': ARM, 'task': TASK,
+                     'obstacles': [{'type': 'sphere', 'center': [5.0, 0.0], 'radius': 1e10}]})
+
+
+@pytest.mark.parametrize('args, field', [
+    (['plan', SCENES / 'fig3a.yaml', '--png', 'figure.jpg'], '--png'),
+    (['plan', SCENES / 'fig3a.yaml', '--seed', '-1'], '--seed'),
+    (['drill', SCENES / 'fig3a.yaml', '--trials', '0'], '--trials'),
+    (['bench', '--scenes', '0'], '--scenes'),
+    (['bench', '--cells', '0'], '--cells'),
+])
+def test_bad_flags_are_refused_before_any_work(tmp_path, args, field):
+    out = tmp_path / 'plan.json'
+    run = ftplan(*args, '--json', out) if args[0] == 'plan' else ftplan(*args)
+    one_line_error(run, field)
+    assert 'tracing' not in run.stderr and not out.exists()
+
+
+def test_the_plan_json_has_no_infinity_without_obstacles(tmp_path):
+    out = tmp_path / 'plan.json'
+    assert ftplan('plan', SCENES / 'paper_a_free.yaml', '--json', out).returncode == 0
+
+    def refuse(constant):
+        raise AssertionError(f'{constant} is not JSON')
+    data = json.loads(out.read_text(), parse_constant=refuse)
+    assert data['feasible'] is True
+    assert data['stats']['min_clearance_m'] is None  # infinite: no obstacle anywhere
+
+
+@pytest.mark.parametrize('options', [
+    {'margin': -0.3}, {'margin': math.nan}, {'chord_samples': 0}, {'recovery_moments': 0},
+    {'max_depth': -1}])
+def test_options_that_would_weaken_the_check_are_refused(options):
+    with pytest.raises(ValueError):
+        VerificationOptions(**options)
+
+
+def test_a_disk_just_clear_of_the_base_is_not_taken_for_one_covering_it():
+    near = [{'type': 'sphere', 'center': [-0.205, 0.0], 'radius': 0.2}]
+    scene = parse_scene({'robot': ARM, 'task': TASK, 'obstacles': near})
+    plan(scene)  # no InputError: the disk is 5 mm from the base
+    covering = [{'type': 'sphere', 'center': [-0.195, 0.0], 'radius': 0.2}]
+    with pytest.raises(ValueError, match='covers the robot base'):
+        plan(parse_scene({'robot': ARM, 'task': TASK, 'obstacles': covering}))
+
+
+def test_a_lock_a_hair_past_either_end_of_the_path_recovers():
+    result = plan(load_scene(SCENES / 'fig3a.yaml'))
+    path = result.nominal_path
+    for end, outward in ((path[0], path[0] - path[1]), (path[-1], path[-1] - path[-2])):
+        for joint in range(3):
+            theta = end.copy()
+            theta[joint] += 1e-9 * np.sign(outward[joint] or 1.0)
+            rescue = recover(result.surface, theta, joint)
+            assert rescue is not None and rescue.path[0, joint] == theta[joint]
