@@ -146,3 +146,19 @@ def _configuration_at(scene, x):
     theta = project_to_preimage(scene.robot, x, np.array([0.3, 1.0, 1.0]))
     assert theta is not None
     return theta
+
+
+def test_a_lock_at_an_angle_sweeps_the_arm_there_and_checks_the_sweep(ros):
+    scene = load_scene(FIG3A)
+    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0])
+    ros.probe.listen(JointState, '/joint_states', 1000)
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    # Locking joint1 nearly a full turn away swings the stretched arm through the disks,
+    # although it starts and ends clear of them.
+    target = 2 * np.pi - 0.05
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    assert checker.min_clearance(np.array([[0.0, 0.0, 0.0], [target, 0.0, 0.0]])).min() > 0.0
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1', target))
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.level == 'ERROR'])[0]
+    assert 'collision' in status.message and int(status.values['collisions']) == 1
+    wait_for(lambda: abs(last(ros)[0] - target) < 1e-12, what='joint1 at the lock angle')

@@ -514,6 +514,7 @@ class ExecutorNode(Node):
         if self.state == State.RECOVERING and ex.command is None and \
                 time.monotonic() - ex.stop_requested > \
                 float(self.get_parameter('stop_timeout').value):
+            self._stop()  # once more: the first request may have been lost
             self._fail('the arm did not stop after the lock (no two equal joint states within '
                        'stop_timeout)')
             return

@@ -259,7 +259,11 @@ class SimNode(Node):
         if abs(value - self.q[joint]) > _LOCK_SNAP_TOLERANCE:
             self.get_logger().warning(f'{event.name} locks at {value:.6f} rad, '
                                       f'{value - self.q[joint]:+.6f} rad from where it is')
-            self.q[joint] = value
+            jumped = self.q.copy()
+            jumped[joint] = value
+            self._check_clearance(densify(np.stack([self.q, jumped]), float(
+                self.get_parameter('collision_check_step').value)))
+            self.q = jumped
         self.locked[joint] = value
         if self.get_parameter('brake_on_lock').value:
             self.motion = None
