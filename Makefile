@@ -40,6 +40,8 @@ $(VENV_STAMP): requirements.txt constraints.txt $(SETUP_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --disable-pip-version-check -c constraints.txt -r requirements.txt
 	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps -e ftplan_msgs_py -e ftplan_ros
+	@echo "compiling the continuation kernel (numba, once: about 10 s)"
+	$(BIN)/ftplan plan config/scenes/paper_a_free.yaml > /dev/null 2>&1
 	touch $@
 
 $(ROS_LAYOUT): $(VENV_STAMP) $(LAYOUT_FILES)

@@ -23,6 +23,7 @@ import numpy as np
 
 from .angles import configuration_difference, wrap_configuration
 from .collision import CollisionChecker
+from .continuation import CLOSED, STALLED, TOO_LONG, trace_curve
 from .robot import Robot
 
 log = logging.getLogger(__name__)
@@ -239,73 +240,22 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
               ) -> tuple[list[np.ndarray], bool, np.ndarray]:
     """Predictor-corrector from `seed` until the loop closes, a limit or a dead end.
 
-    With a `target`, it also stops as soon as a point comes within a step of it.
+    With a `target`, it also stops as soon as a point comes within a step of it. The
+    steps run in the compiled kernel of continuation.py.
     """
-    periodic = robot.periodic
-    tangent = direction * null_space_tangent(robot, seed)
-    seed_tangent = tangent
-    points = [seed]
-    theta = seed
-    step = options.step_max
-    travelled = 0.0
-    min_turn = np.cos(options.max_turn)
-    while len(points) < options.max_points:
-        corrected = _correct(robot, x, theta + step * tangent, tangent, options.tolerance)
-        if corrected is not None:
-            corrected, new_tangent = corrected
-            moved = np.linalg.norm(corrected - theta)
-            if new_tangent @ tangent < min_turn or moved > 1.5 * step:
-                corrected = None
-        if corrected is None:
-            step *= 0.5
-            if step < options.step_min:
-                log.debug('continuation stalled at %s', theta)
-                return points, False, np.zeros(robot.n_joints)
-            continue
-        if not _within_limits(robot, corrected):
-            return points, False, np.zeros(robot.n_joints)
-        travelled += moved
-        theta, tangent = corrected, new_tangent
-        points.append(theta)
-        if target is not None and np.linalg.norm(
-                configuration_difference(target, theta, periodic)) <= options.step_max:
-            return points, False, np.zeros(robot.n_joints)
-        gap = configuration_difference(theta, seed, periodic)
-        if (travelled > 3.0 * options.step_max and np.linalg.norm(gap) < options.step_max
-                and tangent @ seed_tangent > min_turn):
-            # Back at the seed: the closing chord to seed + period is shorter than a step.
-            period = np.where(periodic, theta - gap - seed, 0.0)
-            period = 2.0 * np.pi * np.round(period / (2.0 * np.pi))
-            return points, True, period
-        step = min(step * 1.5, options.step_max)
-    raise RuntimeError(f'self-motion continuation exceeded {options.max_points} points')
-
-
-def _correct(robot: Robot, x: np.ndarray, predicted: np.ndarray, tangent: np.ndarray,
-             tolerance: float, max_iterations: int = 8,
-             ) -> tuple[np.ndarray, np.ndarray] | None:
-    """Newton on f(θ) = x in the hyperplane through `predicted` orthogonal to `tangent`.
-
-    Returns the point and its unit self-motion direction (oriented like `tangent`): both
-    come from the same bordered matrix [J; tangent], whose solve against the last unit
-    vector is a null vector of J.
-    """
-    theta = predicted.copy()
-    rhs = np.zeros((len(theta), 2))
-    rhs[-1, 1] = 1.0
-    for _ in range(max_iterations + 1):
-        position, jac = robot.kinematics(theta)
-        residual = x - position
-        rhs[:-1, 0] = residual
-        try:
-            solution = np.linalg.solve(np.vstack([jac, tangent]), rhs)
-        except np.linalg.LinAlgError:  # exactly singular: a crossing point was hit
-            return None
-        if residual @ residual < tolerance * tolerance:
-            direction = solution[:, 1]
-            return theta, direction / np.linalg.norm(direction)
-        theta = theta + solution[:, 0]
-    return None
+    limits = robot.limits
+    points, status, period = trace_curve(
+        robot.kernel_kind, robot.kernel_parameters, np.asarray(x, dtype=float),
+        np.asarray(seed, dtype=float), direction * null_space_tangent(robot, seed),
+        robot.periodic, limits[:, 0].copy(), limits[:, 1].copy(), options.step_max,
+        options.step_min, options.max_turn, options.tolerance, options.max_points,
+        np.zeros(robot.n_joints) if target is None else np.asarray(target, dtype=float),
+        target is not None)
+    if status == TOO_LONG:
+        raise RuntimeError(f'self-motion continuation exceeded {options.max_points} points')
+    if status == STALLED:
+        log.debug('continuation stalled at %s', points[-1])
+    return list(points), status == CLOSED, period
 
 
 def _within_limits(robot: Robot, theta: np.ndarray) -> bool:

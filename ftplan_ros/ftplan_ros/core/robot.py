@@ -7,14 +7,16 @@ in radians; positions are in metres in the robot base frame.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol
 
+import numba
 import numpy as np
 
 from .errors import InputError
+
+PLANAR = 0  # `Robot.kernel_kind` of PlanarChain
 
 
 class Robot(Protocol):
@@ -45,8 +47,13 @@ class Robot(Protocol):
     def jacobian(self, thetas: np.ndarray) -> np.ndarray:
         """Position Jacobian (..., m, n) [m/rad] of configurations (..., n) [rad]."""
 
-    def kinematics(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """End-effector position (m,) [m] and Jacobian (m, n) [m/rad] of one configuration."""
+    @property
+    def kernel_kind(self) -> int:
+        """Which compiled kinematics `chain_kinematics` runs for this robot (e.g. PLANAR)."""
+
+    @property
+    def kernel_parameters(self) -> np.ndarray:
+        """The float array that `chain_kinematics` takes as this robot's parameters."""
 
     def link_segments(self, thetas: np.ndarray) -> np.ndarray:
         """Core segments (..., L, 2, 3) [m] of the L link capsules, in the base frame."""
@@ -143,25 +150,15 @@ class PlanarChain:
         dy = np.cumsum((lengths * np.cos(phi))[..., ::-1], axis=-1)[..., ::-1]
         return np.stack([dx, dy], axis=-2)
 
-    def kinematics(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """End-effector position (2,) [m] and Jacobian (2, n) [m/rad], sharing the trigonometry.
+    @property
+    def kernel_kind(self) -> int:
+        """PLANAR: `chain_kinematics` runs `planar_kinematics`."""
+        return PLANAR
 
-        Plain floats: for one configuration of a short chain this is several times faster
-        than numpy's small-array calls, and continuation calls it thousands of times.
-        """
-        phi = 0.0
-        xs, ys = [], []
-        for length, angle in zip(self.link_lengths, theta.tolist(), strict=True):
-            phi += angle
-            xs.append(length * math.cos(phi))
-            ys.append(length * math.sin(phi))
-        jx, jy = [0.0] * len(xs), [0.0] * len(xs)
-        x = y = 0.0
-        for k in range(len(xs) - 1, -1, -1):  # joint k moves links k..n-1
-            x += xs[k]
-            y += ys[k]
-            jx[k], jy[k] = -y, x
-        return np.array([x, y]), np.array([jx, jy])
+    @cached_property
+    def kernel_parameters(self) -> np.ndarray:
+        """The link lengths (n,) [m], the parameters of `planar_kinematics`."""
+        return np.array(self.link_lengths, dtype=float)
 
     def link_segments(self, thetas: np.ndarray) -> np.ndarray:
         """Core segments (..., n, 2, 3) [m] of the link capsules, at z = 0."""
@@ -189,3 +186,40 @@ class PlanarChain:
         outer = lengths.sum()
         inner = max(0.0, 2.0 * lengths.max() - outer)
         return bool(inner - 1e-12 <= np.linalg.norm(x) <= outer + 1e-12)
+
+
+@numba.njit(cache=True)
+def planar_kinematics(lengths: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """End-effector position (2,) [m] and Jacobian (2, n) [m/rad] of a planar chain.
+
+    :param lengths: (n,) link lengths [m]; joint k turns links k..n-1.
+    :param theta: (n,) joint angles [rad].
+    """
+    n = theta.shape[0]
+    xs = np.empty(n)
+    ys = np.empty(n)
+    phi = 0.0
+    for k in range(n):
+        phi += theta[k]
+        xs[k] = lengths[k] * np.cos(phi)
+        ys[k] = lengths[k] * np.sin(phi)
+    position = np.zeros(2)
+    jac = np.empty((2, n))
+    for k in range(n - 1, -1, -1):  # joint k moves links k..n-1
+        position[0] += xs[k]
+        position[1] += ys[k]
+        jac[0, k] = -position[1]
+        jac[1, k] = position[0]
+    return position, jac
+
+
+@numba.njit(cache=True)
+def chain_kinematics(kind: int, parameters: np.ndarray, theta: np.ndarray,
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m,) [m] and Jacobian (m, n) [m/rad] of θ (n,) [rad], compiled, by robot kind.
+
+    The compiled kernels (continuation.py) call this; a new kind of chain adds its branch.
+    """
+    if kind == PLANAR:
+        return planar_kinematics(parameters, theta)
+    raise ValueError('no compiled kinematics for this kind of robot')
