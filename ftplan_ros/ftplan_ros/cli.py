@@ -20,7 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .core import InputError, PlannerOptions, VerificationOptions, load_scene, plan
+from .core import (
+    InputError,
+    PlannerOptions,
+    VerificationOptions,
+    load_kernels,
+    load_scene,
+    plan,
+)
 from .core.drill import drilled_motion, run_drill, summarize_drill
 
 log = logging.getLogger('ftplan')
@@ -118,6 +125,7 @@ def _plan(args: argparse.Namespace, progress: Progress):
     if not np.isfinite(args.margin) or args.margin < 0:
         raise InputError('--margin', f'must be a finite clearance >= 0, got {args.margin}')
     options = PlannerOptions(verification=VerificationOptions(margin=args.margin))
+    load_kernels(scene.robot)  # not part of the plan time
     result = plan(scene, options, np.random.default_rng(args.seed), progress=progress.line)
     return scene, result
 

@@ -10,7 +10,13 @@ Nothing below this package imports rclpy. Typical use:
 from .collision import CollisionChecker
 from .errors import InputError
 from .failure_surface import FailureSurface
-from .manifolds import ManifoldCache, ManifoldOptions, SelfMotionManifold, self_motion_path
+from .manifolds import (
+    ManifoldCache,
+    ManifoldOptions,
+    SelfMotionManifold,
+    load_kernels,
+    self_motion_path,
+)
 from .planner import PlannerOptions, check_plannable, plan
 from .recovery import RecoveryPath, locate_on_nominal_path, recover
 from .result import PlanResult
@@ -22,6 +28,6 @@ __all__ = [
     'CollisionChecker', 'FailureSurface', 'InputError', 'ManifoldCache', 'ManifoldOptions',
     'Obstacle', 'PlanResult', 'PlanarChain', 'PlannerOptions', 'RecoveryPath', 'Robot',
     'Scene', 'SelfMotionManifold', 'Task', 'VerificationOptions', 'check_plannable',
-    'load_scene', 'locate_on_nominal_path', 'parse_scene', 'plan', 'recover', 'scene_to_dict',
-    'self_motion_path',
+    'load_kernels', 'load_scene', 'locate_on_nominal_path', 'parse_scene', 'plan', 'recover',
+    'scene_to_dict', 'self_motion_path',
 ]

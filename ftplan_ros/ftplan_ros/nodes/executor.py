@@ -56,6 +56,7 @@ from ftplan_ros.core import (
     CollisionChecker,
     FailureSurface,
     InputError,
+    load_kernels,
     recover,
     self_motion_path,
 )
@@ -174,6 +175,7 @@ class ExecutorNode(Node):
 
         robot = self.scene.robot
         self.names = list(robot.joint_names)
+        load_kernels(robot)  # approaches along M_s trace with it
         self.diagnostics = Diagnostics(self)
         self.state = State.IDLE
         self.plan: HeldPlan | None = None

@@ -55,6 +55,7 @@ from ftplan_ros.core import (
     Scene,
     Task,
     VerificationOptions,
+    load_kernels,
     plan,
 )
 
@@ -113,6 +114,7 @@ class PlannerNode(Node):
         self.add_post_set_parameters_callback(self._parameters_set)
 
         self.cache = ManifoldCache()
+        load_kernels(self.scene.robot)
         self.diagnostics = Diagnostics(self)
         self._lock = threading.Lock()
         self._joint_state: np.ndarray | None = None
