@@ -38,6 +38,7 @@ from .core import InputError, Scene, load_scene
 from .nodes.executor import ExecutorNode
 from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode
+from .nodes.reporting import parse_number, parse_vector
 from .nodes.sim import SimNode
 from .nodes.spinning import BackgroundSpin
 from .nodes.topics import (
@@ -193,8 +194,8 @@ class Director:
         return RunReport(
             number, drill, ok, why, values.get('locked_joint', ''),
             report.number('lock_progress'), report.number('recovery_time_s'),
-            _number(sim.get('goal_error_m')), _number(sim.get('min_clearance_m')), collisions,
-            np.array(_vector(lock)) if lock else None,
+            parse_number(sim.get('goal_error_m')), parse_number(sim.get('min_clearance_m')),
+            collisions, np.array(parse_vector(lock)) if lock else None,
             np.array(self.recording) if record and self.recording else None)
 
 
@@ -244,18 +245,6 @@ def write_motion_png(scene: Scene, report: RunReport, path: Path) -> Path:
         title = (f'{scene.name} through ROS: {report.locked_joint} locked at '
                  f'{report.lock_progress:.0%} of the nominal path, recovered')
     return save_figure(motion_figure(scene, motion, index, joint, title), path)
-
-
-def _vector(text: str) -> list[float]:
-    """Parse '[a, b, c]' (how reports format configurations)."""
-    return [float(v) for v in text.strip('[] ').split(',')]
-
-
-def _number(text: str | None) -> float:
-    try:
-        return float(text)
-    except (TypeError, ValueError):
-        return float('nan')
 
 
 def _parser() -> argparse.ArgumentParser:

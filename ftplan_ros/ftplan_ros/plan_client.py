@@ -48,7 +48,7 @@ from ftplan_msgs_py import (
 )
 
 from .nodes.qos import LATCHED_QOS
-from .nodes.reporting import stamp_key
+from .nodes.reporting import parse_number, stamp_key
 from .nodes.topics import (
     DIAGNOSTICS,
     EXECUTE_SERVICE,
@@ -247,7 +247,7 @@ class PlanClient(Node):
         key = stamp_key(response.plan.header.stamp)
         status = self.wait_for_status(self._planner_status, lambda v: v.get('stamp') == key,
                                       1.0 if not response.plan.poses else 0.2, mark)
-        plan_time = _number(status.values.get('plan_time_s')) if status else float('nan')
+        plan_time = parse_number(status.values.get('plan_time_s')) if status else float('nan')
         if not response.plan.poses:
             reason = status.message if status else \
                 'no failure-tolerant plan (the planner\'s reason did not arrive)'
@@ -354,13 +354,6 @@ def _pose(position: Sequence[float] | None, frame_id: str) -> PoseStamped:
     xyz = [float(v) for v in position] + [0.0] * (3 - len(position))
     return PoseStamped(header=Header(frame_id=frame_id),
                        pose=Pose(position=Point(x=xyz[0], y=xyz[1], z=xyz[2])))
-
-
-def _number(text: str | None) -> float:
-    try:
-        return float(text)
-    except (TypeError, ValueError):
-        return float('nan')
 
 
 def _execution_number(message: str) -> int | None:

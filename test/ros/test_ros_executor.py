@@ -9,6 +9,7 @@ from std_srvs.srv import Trigger
 from ftplan_msgs_py import create_locked_joint
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.planner import PlannerNode
+from ftplan_ros.nodes.reporting import parse_vector
 from ftplan_ros.nodes.sim import SimNode
 from ftplan_ros.plan_client import Outcome, PlanClient
 
@@ -154,12 +155,12 @@ def test_a_lock_during_the_nominal_phase_is_recovered_by_the_core(slow_suite):
     assert 0.3 < float(done.values['lock_progress']) < 1.0
     assert float(done.values['goal_error_m']) < 0.01
     # The arm stopped on the nominal path, and joint3 stayed where it locked.
-    locked = np.array([float(v) for v in done.values['lock_configuration'].strip('[]').split(',')])
+    locked = np.array(parse_vector(done.values['lock_configuration']))
     gaps = np.linalg.norm(motion.trajectory - locked, axis=1)
     assert gaps.min() < np.abs(np.diff(motion.trajectory, axis=0)).max() * 2
     final = wait_for(lambda: [s for s in ros.probe.statuses('ftplan_sim: arm')
                               if s.values['goal_reached'] == 'True'])[-1]
-    q = np.array([float(v) for v in final.values['configuration'].strip('[]').split(',')])
+    q = np.array(parse_vector(final.values['configuration']))
     assert q[2] == pytest.approx(locked[2], abs=1e-6)
     assert final.values['collisions'] == '0'
 

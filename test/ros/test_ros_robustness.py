@@ -23,6 +23,7 @@ from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.injector import InjectorNode
 from ftplan_ros.nodes.planner import PlannerNode, plan_markers
 from ftplan_ros.nodes.qos import LATCHED_QOS
+from ftplan_ros.nodes.reporting import parse_vector
 from ftplan_ros.nodes.sim import SimNode
 from ftplan_ros.nodes.topics import FAILURE_SURFACE, START_CONFIGURATION, TRAJECTORY
 from ftplan_ros.plan_client import Outcome, PlanClient
@@ -108,8 +109,8 @@ def test_a_joint_state_of_other_joints_does_not_make_the_start_unknown(ros, ros_
     x_q = load_scene(SCENES / 'paper_c_free.yaml').robot.forward_kinematics(q)
     reported = wait_for(lambda: [s for s in ros.probe.statuses('ftplan_planner: plan')
                                  if s.values.get('stamp') == motion.stamp])[0]
-    start = [float(v) for v in reported.values['start'].strip('[]').split(',')]
-    assert np.allclose(start, x_q, atol=1e-6)  # planned from where the joint state puts it
+    # Planned from where the joint state puts the end effector:
+    assert np.allclose(parse_vector(reported.values['start']), x_q, atol=1e-6)
 
 
 def test_a_callback_that_raises_is_logged_and_spinning_goes_on(ros):

@@ -27,6 +27,19 @@ def format_vector(values) -> str:
     return '[' + ', '.join(f'{float(v):.6f}' for v in values) + ']'
 
 
+def parse_vector(text: str) -> list[float]:
+    """Read back a `format_vector` text '[a, b, c]' as numbers."""
+    return [float(v) for v in text.strip('[] ').split(',')]
+
+
+def parse_number(text: str | None) -> float:
+    """Read a numeric status value; NaN when it is missing or not a number."""
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return float('nan')
+
+
 class Diagnostics:
     """Publish a node's statuses on /diagnostics and, when asked, log them too."""
 
