@@ -185,6 +185,7 @@ class ExecutorNode(Node):
         self.q: np.ndarray | None = None
         self._previous_q: np.ndarray | None = None
         self._obstacles = ObstacleSet(self.scene.frame_id)
+        self._checker = CollisionChecker(robot, self.scene.obstacles)  # scene + topic
         self._start_msg: JointState | None = None
         self._trajectory_msg: JointTrajectory | None = None
         self._surface_msg: Float64MultiArray | None = None
@@ -256,12 +257,15 @@ class ExecutorNode(Node):
         self.report_status(f'holding plan {key}')
 
     def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Keep the obstacle topic, for checking approach moves."""
+        """Keep the obstacle topic, for checking approach moves and the held plan's S_F."""
         try:
             self._obstacles.update(msg)
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
                                       f'the {len(self._obstacles)} previous')
+            return
+        self._checker = CollisionChecker(self.scene.robot,
+                                         self._obstacles.scene(self.scene).obstacles)
 
     # Execution ----------------------------------------------------------------------
 
@@ -301,13 +305,9 @@ class ExecutorNode(Node):
             locked = [self.names[j] for j in sorted(self.locked_joints)]
             return False, (f'{locked} locked in execution {self.execution.number} and would be '
                            f'commanded: call {self.get_name()}/reset once repaired')
-        obstacles = self._obstacles.scene(self.scene).obstacles
-        if obstacles:
-            clearance = CollisionChecker(self.scene.robot, obstacles).min_clearance(
-                self.plan.surface.vertices).min()
-            if clearance <= 0.0:
-                return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
-                               'surface now meets one; plan again')
+        if self._checker.min_clearance(self.plan.surface.vertices).min() <= 0.0:
+            return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
+                           'surface now meets one; plan again')
         self.executions += 1
         self.execution = Execution(self.executions, self.plan, self.plan.surface,
                                    time.monotonic(),
@@ -350,14 +350,13 @@ class ExecutorNode(Node):
         if np.max(np.abs(moves[0][-1] - q)) <= \
                 float(self.get_parameter('arrival_tolerance').value):
             return moves[0][-1:].copy(), 'already at theta_s'
-        checker = CollisionChecker(robot, self._obstacles.scene(self.scene).obstacles)
         x_s = robot.forward_kinematics(theta_s)
         if np.linalg.norm(robot.forward_kinematics(q) - x_s) <= ON_MANIFOLD_TOLERANCE:
             path = self_motion_path(robot, x_s, q, theta_s)
-            if path is not None and path_clearance(checker, path, COLLISION_CHECK_STEP) > 0.0:
+            if path is not None and path_clearance(self._checker, path, COLLISION_CHECK_STEP) > 0.0:
                 return path.copy(), f'approaching theta_s along M_s ({len(path)} points)'
         for move in moves:
-            if path_clearance(checker, move, COLLISION_CHECK_STEP) > 0.0:
+            if path_clearance(self._checker, move, COLLISION_CHECK_STEP) > 0.0:
                 return move, 'approaching theta_s by a straight joint move'
         return None, ('no collision-free approach to theta_s: neither along M_s nor by a '
                       'straight joint move')
