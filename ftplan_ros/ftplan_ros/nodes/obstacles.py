@@ -8,32 +8,27 @@ length sz. Orientations become roll, pitch, yaw [rad].
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import ObstacleKey, ObstacleShape, read_obstacle_markers
 from ftplan_ros.core import Obstacle, Scene
 
+# Fixed-axis x, y, z ('xyz' in scipy, lower case: extrinsic): R = Rz Ry Rx, as in URDF.
+_RPY_AXES = 'xyz'
+
 
 def rpy_from_quaternion(q: np.ndarray) -> tuple[float, float, float]:
     """Return roll, pitch, yaw [rad] (R = Rz Ry Rx) of the unit quaternion (x, y, z, w)."""
-    x, y, z, w = (float(v) for v in q)
-    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return roll, pitch, yaw
+    return tuple(float(v) for v in Rotation.from_quat(q).as_euler(_RPY_AXES))
 
 
 def quaternion_from_rpy(rpy) -> np.ndarray:
     """Return the unit quaternion (x, y, z, w) of roll, pitch, yaw [rad] (R = Rz Ry Rx)."""
-    roll, pitch, yaw = (0.5 * float(v) for v in rpy)
-    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch),
-                              math.sin(pitch), math.cos(yaw), math.sin(yaw))
-    return np.array([sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
-                     cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy])
+    return Rotation.from_euler(_RPY_AXES, rpy).as_quat()
 
 
 def obstacle_from_shape(shape: ObstacleShape) -> Obstacle:
