@@ -7,7 +7,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import create_obstacle_markers
 from ftplan_ros.core import Obstacle, load_scene
-from ftplan_ros.nodes.motion import progress_along, straight_moves, time_path, wrap
+from ftplan_ros.core.angles import wrap_angle
+from ftplan_ros.nodes.motion import progress_along, straight_moves, time_path
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
     obstacle_from_shape,
@@ -45,7 +46,7 @@ def test_straight_moves_offer_both_ways_round_shortest_first():
     lengths = [np.linalg.norm(m[1] - m[0]) for m in moves]
     assert lengths == sorted(lengths)
     for move in moves:
-        assert np.allclose(wrap(move[1, :2]), wrap(np.array([-3.0, 0.5])))
+        assert np.allclose(wrap_angle(move[1, :2]), wrap_angle(np.array([-3.0, 0.5])))
         assert move[1, 2] == 1.0
     assert moves[0][1, 0] == pytest.approx(2 * np.pi - 3.0)      # through pi, not round zero
 

@@ -10,14 +10,10 @@ import itertools
 import numpy as np
 
 from ftplan_ros.core import CollisionChecker
+from ftplan_ros.core.angles import configuration_difference
 from ftplan_ros.core.paths import densify
 
 MIN_STEP_TIME = 1e-3  # [s] keeps the times of a trajectory strictly increasing
-
-
-def wrap(angles: np.ndarray) -> np.ndarray:
-    """Wrap angles [rad] to (-π, π]."""
-    return np.pi - np.mod(np.pi - np.asarray(angles, dtype=float), 2.0 * np.pi)
 
 
 def time_path(path: np.ndarray, max_speed: float, min_step: float = MIN_STEP_TIME,
@@ -32,26 +28,19 @@ def time_path(path: np.ndarray, max_speed: float, min_step: float = MIN_STEP_TIM
     return np.concatenate([[0.0], np.cumsum(np.maximum(steps, min_step))])
 
 
-def differences(q: np.ndarray, points: np.ndarray, periodic: np.ndarray | None) -> np.ndarray:
-    """Return q - points (..., n) [rad], wrapped to (-π, π] on the periodic joints."""
-    delta = np.asarray(q, dtype=float) - points
-    if periodic is not None and np.any(periodic):
-        delta = np.where(periodic, wrap(delta), delta)
-    return delta
-
-
 def progress_along(path: np.ndarray, q: np.ndarray, periodic: np.ndarray | None = None,
                    ) -> tuple[float, float]:
     """Project q (n,) onto the polyline `path` (k, n): (fraction of its length, distance [rad]).
 
     With `periodic`, q may differ from the path by whole turns of those joints.
     """
+    periodic = False if periodic is None else periodic
     if len(path) < 2:
-        return 1.0, float(np.linalg.norm(differences(q, path[-1], periodic)))
+        return 1.0, float(np.linalg.norm(configuration_difference(q, path[-1], periodic)))
     a, b = path[:-1], path[1:]
     direction = b - a
     lengths2 = np.einsum('sn,sn->s', direction, direction)
-    offset = differences(q, a, periodic)
+    offset = configuration_difference(q, a, periodic)
     t = np.clip(np.einsum('sn,sn->s', offset, direction) / np.maximum(lengths2, 1e-300), 0, 1)
     gaps = np.linalg.norm(offset - t[:, None] * direction, axis=1)
     best = int(np.argmin(gaps))
@@ -69,7 +58,7 @@ def straight_moves(q: np.ndarray, target: np.ndarray, periodic: np.ndarray) -> l
     target plus whole turns, so the last point of a move may differ from `target` by 2π.
     """
     q = np.asarray(q, dtype=float)
-    nearest = q + differences(target, q, periodic)
+    nearest = q + configuration_difference(target, q, periodic)
     options = []
     for j in range(len(q)):
         if periodic[j] and nearest[j] != q[j]:

@@ -41,10 +41,10 @@ from ftplan_msgs_py import (
     time_to_seconds,
 )
 from ftplan_ros.core import CollisionChecker, Scene
+from ftplan_ros.core.angles import wrap_configuration
 from ftplan_ros.core.manifolds import trace_self_motion_manifolds
 from ftplan_ros.core.paths import densify
 
-from .motion import wrap
 from .obstacles import ObstacleSet
 from .params import (
     add_validators,
@@ -86,7 +86,7 @@ def default_initial_configuration(scene: Scene) -> np.ndarray:
     points = np.vstack([b.points for b in branches])
     clearance = CollisionChecker(robot, scene.obstacles).min_clearance(points)
     best = points[int(np.argmax(clearance))]
-    return np.where(robot.periodic, wrap(best), best)
+    return wrap_configuration(best, robot.periodic)
 
 
 class Motion:
