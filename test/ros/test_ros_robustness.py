@@ -9,6 +9,7 @@ from ros_support import FIG3A, SCENES, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout, String
 from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import (
@@ -42,9 +43,8 @@ def test_an_empty_failure_surface_is_rejected_and_the_executor_stays_up(ros):
     ros.probe.publish(Float64MultiArray, FAILURE_SURFACE, empty, LATCHED_QOS)
     ros.probe.publish(JointState, START_CONFIGURATION,
                       create_joint_state(NAMES, nominal[0], stamp=stamp), LATCHED_QOS)
-    ros.probe.publish(type(create_joint_trajectory(NAMES, nominal, [0.0, 1.0], stamp)),
-                      TRAJECTORY, create_joint_trajectory(NAMES, nominal, [0.0, 1.0], stamp),
-                      LATCHED_QOS)
+    ros.probe.publish(JointTrajectory, TRAJECTORY,
+                      create_joint_trajectory(NAMES, nominal, [0.0, 1.0], stamp), LATCHED_QOS)
     wait_for(lambda: [s for s in ros.probe.statuses('ftplan_executor: plan')
                       if 'each must be >= 1' in s.message], what='the rejection')
     response = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
