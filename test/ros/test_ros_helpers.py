@@ -70,16 +70,16 @@ def test_obstacles_survive_the_marker_round_trip(obstacle):
 
 def test_an_obstacle_set_is_all_or_nothing():
     scene = load_scene(SCENES / 'paper_a_free.yaml')
-    obstacles = ObstacleSet('base_link')
+    obstacles = ObstacleSet(scene)
     sphere = shape_from_obstacle(('a', 0), Obstacle('sphere', (1.0, 1.0, 0.0), radius=0.1))
     obstacles.update(create_obstacle_markers([sphere], 'base_link'))
-    assert len(obstacles.scene(scene).obstacles) == 1
+    assert len(obstacles.scene().obstacles) == 1
     bad = MarkerArray(markers=[Marker(action=Marker.DELETEALL),
                                Marker(type=Marker.ARROW, action=Marker.ADD)])
     with pytest.raises(ValueError, match='ARROW'):
         obstacles.update(bad)
     assert len(obstacles) == 1                                    # the DELETEALL did not apply
-    assert obstacles.scene(scene).obstacles[0].radius == pytest.approx(0.1)
+    assert obstacles.scene().obstacles[0].radius == pytest.approx(0.1)
 
 
 def test_sim_motion_samples_linearly_and_ends_exactly():

@@ -53,7 +53,6 @@ from ftplan_msgs_py import (
     read_locked_joint,
 )
 from ftplan_ros.core import (
-    CollisionChecker,
     FailureSurface,
     InputError,
     load_kernels,
@@ -184,8 +183,7 @@ class ExecutorNode(Node):
         self.locked_joints: set[int] = set()  # locked in an execution, not yet repaired
         self.q: np.ndarray | None = None
         self._previous_q: np.ndarray | None = None
-        self._obstacles = ObstacleSet(self.scene.frame_id)
-        self._checker = CollisionChecker(robot, self.scene.obstacles)  # scene + topic
+        self._obstacles = ObstacleSet(self.scene)
         self._start_msg: JointState | None = None
         self._trajectory_msg: JointTrajectory | None = None
         self._surface_msg: Float64MultiArray | None = None
@@ -263,9 +261,6 @@ class ExecutorNode(Node):
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
                                       f'the {len(self._obstacles)} previous')
-            return
-        self._checker = CollisionChecker(self.scene.robot,
-                                         self._obstacles.scene(self.scene).obstacles)
 
     # Execution ----------------------------------------------------------------------
 
@@ -305,7 +300,7 @@ class ExecutorNode(Node):
             locked = [self.names[j] for j in sorted(self.locked_joints)]
             return False, (f'{locked} locked in execution {self.execution.number} and would be '
                            f'commanded: call {self.get_name()}/reset once repaired')
-        if self._checker.min_clearance(self.plan.surface.vertices).min() <= 0.0:
+        if self._obstacles.checker.min_clearance(self.plan.surface.vertices).min() <= 0.0:
             return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
                            'surface now meets one; plan again')
         self.executions += 1
@@ -353,10 +348,11 @@ class ExecutorNode(Node):
         x_s = robot.forward_kinematics(theta_s)
         if np.linalg.norm(robot.forward_kinematics(q) - x_s) <= ON_MANIFOLD_TOLERANCE:
             path = self_motion_path(robot, x_s, q, theta_s)
-            if path is not None and path_clearance(self._checker, path, COLLISION_CHECK_STEP) > 0.0:
+            if path is not None and \
+                    path_clearance(self._obstacles.checker, path, COLLISION_CHECK_STEP) > 0.0:
                 return path.copy(), f'approaching theta_s along M_s ({len(path)} points)'
         for move in moves:
-            if path_clearance(self._checker, move, COLLISION_CHECK_STEP) > 0.0:
+            if path_clearance(self._obstacles.checker, move, COLLISION_CHECK_STEP) > 0.0:
                 return move, 'approaching theta_s by a straight joint move'
         return None, ('no collision-free approach to theta_s: neither along M_s nor by a '
                       'straight joint move')

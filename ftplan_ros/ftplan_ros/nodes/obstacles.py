@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import ObstacleKey, ObstacleShape, read_obstacle_markers
-from ftplan_ros.core import Obstacle, Scene
+from ftplan_ros.core import CollisionChecker, Obstacle, Scene
 
 # Fixed-axis x, y, z ('xyz' in scipy, lower case: extrinsic): R = Rz Ry Rx, as in URDF.
 _RPY_AXES = 'xyz'
@@ -56,12 +56,17 @@ def shape_from_obstacle(key: ObstacleKey, obstacle: Obstacle) -> ObstacleShape:
 
 
 class ObstacleSet:
-    """The obstacles received on /ftplan/obstacles, keyed (ns, id) as RViz keys markers."""
+    """The obstacles received on /ftplan/obstacles, keyed (ns, id) as RViz keys markers.
 
-    def __init__(self, frame_id: str):
-        self.frame_id = frame_id
+    They add to the static obstacles of a base scene; `checker` checks against both.
+    """
+
+    def __init__(self, base: Scene):
+        self.base = base
+        self.frame_id = base.frame_id
         self.shapes: Mapping[ObstacleKey, ObstacleShape] = {}
         self.obstacles: tuple[Obstacle, ...] = ()
+        self.checker = CollisionChecker(base.robot, base.obstacles)
 
     def update(self, msg: MarkerArray) -> None:
         """Apply a MarkerArray (ADD, DELETE, DELETEALL); all or nothing.
@@ -71,10 +76,11 @@ class ObstacleSet:
         shapes = read_obstacle_markers(msg, self.frame_id, self.shapes)
         obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
         self.shapes, self.obstacles = shapes, obstacles
+        self.checker = CollisionChecker(self.base.robot, self.scene().obstacles)
 
-    def scene(self, base: Scene) -> Scene:
-        """Return `base` with these obstacles added to its static ones."""
-        return base.with_obstacles(self.obstacles) if self.obstacles else base
+    def scene(self) -> Scene:
+        """Return the base scene with these obstacles added to its static ones."""
+        return self.base.with_obstacles(self.obstacles) if self.obstacles else self.base
 
     def __len__(self) -> int:
         return len(self.obstacles)

@@ -119,7 +119,7 @@ class PlannerNode(Node):
         self._lock = threading.Lock()
         self._joint_state: np.ndarray | None = None
         self._joint_state_problem = 'no joint state received yet on /joint_states'
-        self._obstacles = ObstacleSet(self.scene.frame_id)
+        self._obstacles = ObstacleSet(self.scene)
         self._pending_results: tuple | None = None
         self._pending_markers: tuple | None = None
 
@@ -239,7 +239,7 @@ class PlannerNode(Node):
         with self._lock:
             q = self._joint_state
             joint_state_problem = self._joint_state_problem
-            scene = self._obstacles.scene(self.scene)
+            scene = self._obstacles.scene()
         if request.start.header.frame_id == '':
             if q is None:
                 raise InputError('start', f'empty frame_id asks for the current position, but '

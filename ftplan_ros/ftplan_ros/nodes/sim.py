@@ -147,8 +147,7 @@ class SimNode(Node):
 
         self.names = list(robot.joint_names)
         self.diagnostics = Diagnostics(self)
-        self._obstacles = ObstacleSet(self.scene.frame_id)
-        self._checker = CollisionChecker(robot, self.scene.obstacles)
+        self._obstacles = ObstacleSet(self.scene)
         given = array_parameter(self, 'initial_configuration')
         self.initial = np.array(given, dtype=float) if given else \
             default_initial_configuration(self.scene)
@@ -277,9 +276,6 @@ class SimNode(Node):
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
                                       f'the {len(self._obstacles)} previous')
-            return
-        self._checker = CollisionChecker(self.scene.robot,
-                                         self._obstacles.scene(self.scene).obstacles)
 
     def reset_callback(self, request: Trigger.Request, response: Trigger.Response,
                        ) -> Trigger.Response:
@@ -332,7 +328,7 @@ class SimNode(Node):
             self.diagnostics.report('arm', 'ERROR', f'internal sim error: {error!r}')
 
     def _check_clearance(self, samples: np.ndarray) -> None:
-        clearance = self._checker.min_clearance(samples)
+        clearance = self._obstacles.checker.min_clearance(samples)
         worst = int(np.argmin(clearance))
         self.min_clearance = min(self.min_clearance, float(clearance[worst]))
         colliding = bool(clearance[worst] <= 0.0)
