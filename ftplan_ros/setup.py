@@ -16,6 +16,7 @@ setup(
         (f'share/{package_name}/config/robots', glob('../config/robots/*.yaml')),
         (f'share/{package_name}/config/scenes', glob('../config/scenes/*.yaml')),
         (f'share/{package_name}/config/params', glob('../config/params/*.yaml')),
+        (f'share/{package_name}/config/studies', glob('../config/studies/*.yaml')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

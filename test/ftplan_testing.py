@@ -18,3 +18,12 @@ def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:
         'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]},
         'obstacles': [{'type': 'sphere', 'center': list(c), 'radius': r} for c, r in obstacles],
         'task': {'start': list(start), 'goal': [1.0, 0.0], 'goal_tolerance': tolerance}})
+
+
+def jacobian(robot, theta):
+    """The task Jacobian (m, n) of a robot at θ (n,) [rad], as the planner computes it."""
+    import numpy as np
+
+    from ftplan_ros.core.robot import task_residuals
+    theta = np.asarray(theta, dtype=float)
+    return task_residuals(robot, robot.forward_kinematics(theta), theta)[1][0]

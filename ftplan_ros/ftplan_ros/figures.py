@@ -479,7 +479,7 @@ def _web_lines(paths: np.ndarray) -> np.ndarray:
 
 
 def _sphere_clearance(robot: PlanarChain, sphere: Obstacle, thetas: np.ndarray) -> np.ndarray:
-    return CollisionChecker(robot, [sphere], backend='numpy').min_clearance(thetas)
+    return CollisionChecker(robot, [sphere]).min_clearance(thetas)
 
 
 # --- text --------------------------------------------------------------------------------

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import ftplan_ros.core
+import ftplan_ros.study
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -20,6 +21,8 @@ def test_ruff_is_clean():
 def test_the_core_and_the_cli_never_import_rclpy():
     modules = [f'ftplan_ros.core.{m.name}' for m in pkgutil.iter_modules(ftplan_ros.core.__path__)]
     modules += ['ftplan_ros.cli', 'ftplan_ros.bench', 'ftplan_ros.figures']
+    modules += [f'ftplan_ros.study.{m.name}'
+                for m in pkgutil.iter_modules(ftplan_ros.study.__path__)]
     code = ('import importlib, sys\n'
             f'for name in {modules!r}:\n'
             '    importlib.import_module(name)\n'

@@ -8,7 +8,7 @@ from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker, plan
 from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle
+from ftplan_ros.core.scene import Obstacle, Task
 from ftplan_ros.core.verification import (
     certify_simplices,
     certify_surface,
@@ -19,6 +19,7 @@ from ftplan_ros.core.verification import (
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
 X_GOAL = np.array([1.0, 0.0])
+GOAL_TASK = Task((2.0, 0.0), (1.0, 0.0), 0.01)
 
 
 def dense_triangle_points(corners, count=40):
@@ -69,7 +70,7 @@ def test_goal_row_bound_holds_against_dense_sampling():
         for branch in trace_self_motion_manifolds(ARM, x, np.random.default_rng(1)):
             for stride in (1, 5, 20):
                 points = branch.points[::stride]
-                bound = goal_row_error(ARM, x, points, samples=4)
+                bound = goal_row_error(ARM, Task(tuple(x), tuple(x)), points, samples=4)[0]
                 t = np.linspace(0, 1, 200)[None, :, None]
                 chords = points[:-1, None] + t * (points[1:, None] - points[:-1, None])
                 true = np.linalg.norm(ARM.forward_kinematics(chords) - x, axis=-1).max()
@@ -109,13 +110,13 @@ def test_an_obstacle_across_the_surface_fails_the_check(free_plan):
     middle = surface.paths[len(surface.paths) // 2, surface.paths.shape[1] // 2]
     elbow = ARM.joint_positions(middle)[2]
     checker = CollisionChecker(ARM, [Obstacle('sphere', (elbow[0], elbow[1], 0.0), radius=0.05)])
-    verdict = verify_surface(surface, checker, X_GOAL, 0.01)
+    verdict = verify_surface(surface, checker, GOAL_TASK)
     assert not verdict.ok and 'not collision-free' in verdict.reason
-    assert verify_surface(surface, CollisionChecker(ARM, []), X_GOAL, 0.01).ok
+    assert verify_surface(surface, CollisionChecker(ARM, []), GOAL_TASK).ok
 
 
 def test_a_goal_row_off_the_goal_fails_the_check(free_plan):
     _, result = free_plan
-    verdict = certify_surface(result.surface, CollisionChecker(ARM, []), X_GOAL + [0.05, 0.0],
-                              0.01)
+    verdict = certify_surface(result.surface, CollisionChecker(ARM, []),
+                              Task((2.0, 0.0), tuple(X_GOAL + [0.05, 0.0]), 0.01))
     assert not verdict.ok and 'goal row strays' in verdict.reason

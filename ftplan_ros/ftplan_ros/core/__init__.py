@@ -17,17 +17,19 @@ from .manifolds import (
     load_kernels,
     self_motion_path,
 )
-from .planner import PlannerOptions, check_plannable, plan
+from .options import PlannerOptions
+from .planner import check_plannable, plan
 from .recovery import RecoveryPath, locate_on_nominal_path, recover
 from .result import PlanResult
-from .robot import PlanarChain, Robot
+from .robot import PlanarChain, Robot, task_errors
 from .scene import Obstacle, Scene, Task, load_scene, parse_scene, scene_to_dict
+from .spatial import SpatialArm
 from .verification import VerificationOptions
 
 __all__ = [
     'CollisionChecker', 'FailureSurface', 'InputError', 'ManifoldCache', 'ManifoldOptions',
     'Obstacle', 'PlanResult', 'PlanarChain', 'PlannerOptions', 'RecoveryPath', 'Robot',
-    'Scene', 'SelfMotionManifold', 'Task', 'VerificationOptions', 'check_plannable',
-    'load_kernels', 'load_scene', 'locate_on_nominal_path', 'parse_scene', 'plan', 'recover',
-    'scene_to_dict', 'self_motion_path',
+    'Scene', 'SelfMotionManifold', 'SpatialArm', 'Task', 'VerificationOptions',
+    'check_plannable', 'load_kernels', 'load_scene', 'locate_on_nominal_path', 'parse_scene',
+    'plan', 'recover', 'scene_to_dict', 'self_motion_path', 'task_errors',
 ]

@@ -20,7 +20,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .collision import CollisionChecker
 from .manifolds import ManifoldOptions, trace_self_motion_manifolds
-from .robot import Robot
+from .robot import Robot, task_errors
 
 
 @dataclass(frozen=True)
@@ -58,8 +58,8 @@ def possibly_free(checker: CollisionChecker, centers: np.ndarray, half_width: np
                   ) -> np.ndarray:
     """Mark (bool, ...) cells where a configuration within `half_width` (n,) [rad] may be free."""
     flat = centers.reshape(-1, centers.shape[-1])
-    clearance = checker.clearance(flat)
-    motion = checker.robot.link_lever_arms() @ half_width
+    clearance = checker.clearance(flat, needed=0.0)
+    motion = checker.lever_arms() @ half_width
     return np.all(clearance > -motion, axis=1).reshape(centers.shape[:-1])
 
 
@@ -67,10 +67,11 @@ def possibly_goal(robot: Robot, x: np.ndarray, centers: np.ndarray, half_width: 
                   tolerance: float = 0.0) -> np.ndarray:
     """Mark (bool, ...) cells where a configuration within `half_width` (n,) [rad] may reach x.
 
-    Reaching means coming within `tolerance` [m] of x (m,) [m].
+    Reaching means coming within `tolerance` [m] of the task point x's position (its
+    orientation is not looked at: the grids are for planar arms).
     """
     flat = centers.reshape(-1, centers.shape[-1])
-    error = np.linalg.norm(robot.forward_kinematics(flat) - x, axis=1)
+    error = task_errors(robot, x, flat)[:, 0]
     reach = robot.tip_lever_arms() @ half_width + tolerance
     return (error <= reach).reshape(centers.shape[:-1])
 

@@ -2,10 +2,10 @@
 
 Tracing is most of a cold plan: thousands of steps, each a few Newton iterations on an
 n x n system, where numpy's per-call overhead dominates in plain Python. The kernel gets
-the robot's kinematics from `chain_kinematics(Robot.kernel_kind, Robot.kernel_parameters,
-θ)`, so it serves any chain with one degree of redundancy (n = m + 1) that has a compiled
-kinematics there. The machine code is cached next to this file (numba's cache), so only
-the first run on a machine compiles. Angles [rad], positions [m].
+the robot's task map from `kernels.task_residual(Robot.kernel_kind,
+Robot.kernel_parameters, x, θ)`, so it serves any chain and task with one degree of
+redundancy (n = m + 1). The machine code is cached next to this file (numba's cache), so
+only the first run on a machine compiles. Angles [rad], positions [m].
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .robot import chain_kinematics
+from .kernels import task_residual
 
 # How a trace ended (the `status` of `trace_curve`).
 OPEN = 0        # a joint limit, a dead end or the target
@@ -38,19 +38,20 @@ def _wrapped_difference(a, b, periodic):
 def _correct(kind, parameters, x, predicted, tangent, tolerance):
     """Newton on f(θ) = x in the hyperplane through `predicted` orthogonal to `tangent`.
 
+    `x` is a task point and `kind`, `parameters` the robot's task map (kernels.py).
+
     Returns (converged, θ, unit self-motion direction oriented like `tangent`); both come
     from the bordered matrix [J; tangent], whose solve against the last unit vector is a
     null vector of J.
     """
     n = predicted.shape[0]
-    m = x.shape[0]
+    m = n - 1
     theta = predicted.copy()
     bordered = np.empty((n, n))
     rhs = np.zeros((n, 2))
     rhs[n - 1, 1] = 1.0
     for _ in range(_NEWTON_ITERATIONS + 1):
-        position, jac = chain_kinematics(kind, parameters, theta)
-        residual = x - position
+        residual, jac = task_residual(kind, parameters, x, theta)
         bordered[:m] = jac
         bordered[m] = tangent
         rhs[:m, 0] = residual

@@ -1,10 +1,11 @@
 """Failure drills: lock a random joint at a random moment and see the arm still arrive.
 
-A drill follows the nominal path to the moment of failure, locks the joint where it is,
-asks `recover` for the way on (exactly what the executor does) and then checks the whole
-motion on its own terms, by dense sampling rather than by the planner's certificate:
-every sampled configuration must be collision-free and the last one within the goal
-tolerance of x_g.
+A drill follows the nominal path to the moment of failure, locks a tolerated joint
+where it is, asks `recover` for the way on (exactly what the executor does) and then
+checks the whole motion on its own terms, by dense sampling rather than by the
+planner's certificate: every sampled configuration must be collision-free and the last
+one within the goal tolerances. `drill_json` writes every trial's motion so that
+another tool can check it again.
 """
 
 from __future__ import annotations
@@ -18,9 +19,11 @@ from .collision import CollisionChecker
 from .paths import densify, path_length, path_until, point_at_fraction
 from .recovery import recover
 from .result import PlanResult
+from .robot import task_errors
 from .scene import Scene
 
 SAMPLE_STEP = 0.002  # [rad] largest joint step between the drill's collision samples
+EXACT_BELOW = 0.02  # [m] clearances reported exactly below this, as lower bounds above
 
 
 @dataclass(frozen=True)
@@ -33,14 +36,26 @@ class DrillTrial:
     recovered: bool          # `recover` returned a path
     collision_free: bool     # every sample of the executed motion was collision-free
     min_clearance: float
-    goal_error: float
+    goal_error: float        # [m] of the position
     recovery_length: float
-    tolerance: float         # the task's goal tolerance
+    reached: bool            # the motion ends within the task's tolerances
+    orientation_error: float = 0.0  # [rad] for pose and axis tasks
+    lock_index: int = -1     # index in `path` of the configuration where the joint locked
+    path: np.ndarray | None = None  # (k, n) the whole motion: nominal to the lock, recovery
 
     @property
     def ok(self) -> bool:
         """Whether the arm reached the goal without a collision."""
-        return self.recovered and self.collision_free and self.goal_error <= self.tolerance
+        return self.recovered and self.collision_free and self.reached
+
+    def to_json(self, joint_names) -> dict:
+        """Return the trial as the drill JSON of CONTRACT.md (radians, metres)."""
+        return {'joint': joint_names[self.joint], 'progress': self.progress,
+                'lock_index': self.lock_index,
+                'path': [] if self.path is None else self.path.tolist(),
+                'reached': bool(self.ok), 'goal_error': _finite_or_none(self.goal_error),
+                'orientation_error': _finite_or_none(self.orientation_error),
+                'min_clearance': _finite_or_none(self.min_clearance)}
 
 
 def drilled_motion(result: PlanResult, joint: int, progress: float,
@@ -60,29 +75,32 @@ def drilled_motion(result: PlanResult, joint: int, progress: float,
 def drill_once(scene: Scene, result: PlanResult, checker: CollisionChecker, joint: int,
                progress: float) -> DrillTrial:
     """Lock `joint` after `progress` (0..1) of the nominal path and check the motion."""
-    tolerance = scene.task.goal_tolerance
     drilled = drilled_motion(result, joint, progress)
     if drilled is None:
         locked = float(point_at_fraction(result.nominal_path, progress)[joint])
         return DrillTrial(joint, progress, locked, False, False, np.nan, np.inf, np.nan,
-                          tolerance)
+                          False, np.inf)
     motion, lock_index, locked = drilled
-    clearance = float(checker.min_clearance(densify(motion, SAMPLE_STEP)).min())
-    error = float(np.linalg.norm(scene.robot.forward_kinematics(motion[-1])
-                                 - np.asarray(scene.task.goal)))
-    return DrillTrial(joint, progress, locked, True, clearance > 0.0, clearance, error,
-                      path_length(motion[lock_index:]), tolerance)
+    clearance = float(checker.min_clearance(densify(motion, SAMPLE_STEP), EXACT_BELOW).min())
+    errors = task_errors(scene.robot, scene.task.goal, motion[-1])
+    return DrillTrial(joint, progress, locked, True, clearance > 0.0, clearance,
+                      float(errors[0]), path_length(motion[lock_index:]),
+                      bool(scene.task.reached(errors)), float(errors[1]), lock_index, motion)
 
 
 def run_drill(scene: Scene, result: PlanResult, trials: int, rng: np.random.Generator,
               progress: Callable[[int, int], None] | None = None) -> list[DrillTrial]:
-    """Monte Carlo drill: `trials` failures at a random joint and a uniform random moment."""
+    """Run a Monte Carlo drill: `trials` failures of random tolerated joints.
+
+    Each locks at a uniform random moment of the nominal path.
+    """
     if not result.feasible:
         raise ValueError('a drill needs a feasible plan')
     checker = CollisionChecker(scene.robot, scene.obstacles)
+    joints = result.tolerated_joints
     out = []
     for k in range(trials):
-        joint = int(rng.integers(scene.robot.n_joints))
+        joint = int(joints[rng.integers(len(joints))])
         out.append(drill_once(scene, result, checker, joint, float(rng.uniform())))
         if progress is not None:
             progress(k + 1, trials)
@@ -106,3 +124,20 @@ def summarize_drill(trials: Sequence[DrillTrial], joint_names: Sequence[str]) ->
                     f'{np.nanmin([t.min_clearance for t in group]):>15.4f}'
                     f'{np.nanmax([t.goal_error for t in group]):>18.2e}{spread:>24}')
     return '\n'.join(rows)
+
+
+def drill_json(trials: Sequence[DrillTrial], joint_names: Sequence[str]) -> dict:
+    """Return the drill JSON of CONTRACT.md: every trial, re-checkable, and a summary."""
+    return {'joint_names': list(joint_names),
+            'trials': [trial.to_json(joint_names) for trial in trials],
+            'summary': {'trials': len(trials), 'reached': sum(t.ok for t in trials),
+                        'min_clearance': _finite_or_none(
+                            np.nanmin([t.min_clearance for t in trials])),
+                        'max_goal_error': _finite_or_none(max(t.goal_error for t in trials)),
+                        'max_orientation_error': _finite_or_none(
+                            max(t.orientation_error for t in trials))}}
+
+
+def _finite_or_none(value: float) -> float | None:
+    value = float(value)
+    return value if np.isfinite(value) else None

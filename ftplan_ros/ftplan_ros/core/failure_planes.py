@@ -10,6 +10,7 @@ joint i fixed (for a planar 3R arm, exact 2R inverse kinematics in the plane).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,11 +81,14 @@ def crossing_segments(values: np.ndarray, levels: np.ndarray, periodic: bool) ->
 
 
 def necessary_condition(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray,
-                        ) -> np.ndarray:
-    """Step 3 for many θ_s at once: (C, n) bool, H_i(θ_s) crosses the free arc (a, n)."""
+                        joints: Sequence[int]) -> np.ndarray:
+    """Step 3 for many θ_s at once: (C, J) bool, H_i(θ_s) crosses the free arc (a, n).
+
+    Column k is joint `joints[k]` (the tolerated joints).
+    """
     periodic = robot.periodic
     return np.stack([crossing_segments(arc_points[:, i], candidates[:, i], periodic[i]).any(axis=1)
-                     for i in range(robot.n_joints)], axis=1)
+                     for i in joints], axis=1).reshape(len(candidates), len(joints))
 
 
 def chord_crossings(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray, joint: int,
@@ -112,15 +116,15 @@ def chord_crossings(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray
 
 
 def failure_plane_hits(robot: Robot, x_goal: np.ndarray, theta_s: np.ndarray,
-                       arc_points: np.ndarray, tolerance: float = 1e-10,
-                       ) -> list[list[FailurePlaneHit]]:
-    """Step 3 for one θ_s: for each joint i, the exact points of H_i(θ_s) ∩ M_g on the arc.
+                       arc_points: np.ndarray, joints: Sequence[int],
+                       tolerance: float = 1e-10) -> list[list[FailurePlaneHit]]:
+    """Step 3 for one θ_s: for each joint i of `joints`, the points of H_i(θ_s) ∩ M_g on the arc.
 
     Each chord crossing (`chord_crossings`) is moved onto M_g by Newton in H_i; a
     refinement that leaves the chord's neighbourhood is dropped.
     """
     hits: list[list[FailurePlaneHit]] = []
-    for i in range(robot.n_joints):
+    for i in joints:
         found = []
         _, positions, guesses = chord_crossings(robot, theta_s[None, :], arc_points, i)
         for position, guess in zip(positions, guesses, strict=True):

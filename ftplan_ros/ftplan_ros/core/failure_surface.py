@@ -5,9 +5,10 @@ The web fans out from θ_s: path k runs straight (hence monotonically in every j
 adjacent paths are joined by straight rungs at equal waypoint index. Every quad of the
 web is split into two triangles; the triangles, as patches of joint space, are S_F.
 
-Among the goal points are the exact failure-plane hits θ_{H_i}: the path to θ_{H_i} keeps
-θ_i = θ_s,i exactly. That path, the nominal path (monotonic) and the bottom row (all θ_s)
-are what make a recovery path exist for every lock (see `recovery.py`).
+Among the goal points are the exact failure-plane hits θ_{H_i} of every tolerated joint i:
+the path to θ_{H_i} keeps θ_i = θ_s,i exactly. That path, the nominal path (monotonic)
+and the bottom row (all θ_s) are what make a recovery path exist for every lock of a
+tolerated joint (see `recovery.py`).
 """
 
 from __future__ import annotations
@@ -24,13 +25,15 @@ from .failure_planes import FailurePlaneHit
 class FailureSurface:
     """S_F: `paths` (K, W+1, n) [rad], path k from θ_s (waypoint 0) to goal point k.
 
-    `nominal` is the index of the path the arm follows; `hit_paths[i]` is the path to the
-    failure-plane hit of joint i, on which θ_i stays θ_s,i.
+    `nominal` is the index of the path the arm follows; `tolerated` are the joints whose
+    lock the surface is built for, and `hit_paths[k]` is the path to the failure-plane
+    hit of joint `tolerated[k]`, on which that joint stays at its value in θ_s.
     """
 
     paths: np.ndarray
     nominal: int
     hit_paths: tuple[int, ...]
+    tolerated: tuple[int, ...]
 
     @property
     def theta_s(self) -> np.ndarray:
@@ -123,7 +126,7 @@ class FailureSurface:
     def to_dict(self) -> dict:
         """Return the contract's `failure_surface` JSON object (radians)."""
         return {'paths': self.paths.tolist(), 'nominal': self.nominal,
-                'hit_paths': list(self.hit_paths)}
+                'hit_paths': list(self.hit_paths), 'tolerated': list(self.tolerated)}
 
 
 def lift_goal_arc(theta_s: np.ndarray, arc_points: np.ndarray,
@@ -154,7 +157,7 @@ def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
 
     `window` (first, last) are positions along the arc (units of arc points) that contain
     every hit; goal points are the arc points inside it, thinned to about
-    `column_spacing` [rad] apart, plus the exact hits, one per joint. Paths get enough
+    `column_spacing` [rad] apart, plus the exact hits, one per tolerated joint. Paths get enough
     waypoints that neighbours are at most `waypoint_spacing` [rad] apart in every joint.
     The nominal path is the one to the goal point nearest the window's middle (the
     planner then replaces it by its own choice, the clearest path).
@@ -166,8 +169,9 @@ def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
     columns += [(hit.position, hit.theta, hit.joint) for hit in hits]
     columns.sort(key=lambda column: column[0])
     goals = np.array([theta for _, theta, _ in columns])
+    tolerated = tuple(hit.joint for hit in hits)
     hit_paths = tuple(next(slot for slot, column in enumerate(columns) if column[2] == i)
-                      for i in range(len(theta_s)))
+                      for i in tolerated)
     span = np.max(np.abs(goals - theta_s))
     n_steps = max(1, int(np.ceil(span / waypoint_spacing)))
     fractions = np.arange(n_steps + 1) / n_steps
@@ -175,11 +179,11 @@ def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
     paths[:, 0] = theta_s  # exactly, so the bottom row is one point
     middle = 0.5 * (first + last)
     nominal = min(range(len(columns)), key=lambda slot: abs(columns[slot][0] - middle))
-    return FailureSurface(paths, nominal, hit_paths)
+    return FailureSurface(paths, nominal, hit_paths, tolerated)
 
 
 def smallest_windows(hits: list[list[FailurePlaneHit]]) -> list[tuple[float, float]]:
-    """Minimal arc windows (first, last) holding at least one hit of every joint, shortest first.
+    """Minimal arc windows (first, last) holding a hit of every joint in `hits`, shortest first.
 
     The classic two-pointer sweep over hits sorted by position: for each left hit, the
     nearest right end that completes the set of joints.

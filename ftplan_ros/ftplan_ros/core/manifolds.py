@@ -24,7 +24,7 @@ import numpy as np
 from .angles import configuration_difference, wrap_configuration
 from .collision import CollisionChecker
 from .continuation import CLOSED, STALLED, TOO_LONG, trace_curve
-from .robot import Robot
+from .robot import Robot, task_errors, task_residuals
 
 log = logging.getLogger(__name__)
 
@@ -37,7 +37,8 @@ class ManifoldOptions:
     step_min: float = 1e-5
     max_turn: float = 0.3  # largest tangent turn [rad] accepted in one step
     tolerance: float = 1e-10
-    seeds: int = 48
+    seeds: int = 48               # inverse-kinematics seeds per round
+    seed_rounds: int = 4          # rounds at most; one without a new branch ends the search
     max_points: int = 50_000
 
 
@@ -98,24 +99,32 @@ class SelfMotionManifold:
 def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Generator,
                                 options: ManifoldOptions | None = None,
                                 ) -> tuple[SelfMotionManifold, ...]:
-    """Step 1: trace every branch of the pre-image of the end-effector position x (m,) [m]."""
+    """Step 1: trace every branch of the pre-image of the task point x.
+
+    Seeds come in rounds of `options.seeds` random configurations: a round that finds
+    a new branch is followed by another, up to `options.seed_rounds` (arms with joint
+    limits have many branches, each cut into arcs by the limits).
+    """
     options = options or ManifoldOptions()
     x = np.asarray(x, dtype=float)
     if robot.n_joints - robot.task_dim != 1:
         raise ValueError('self-motion curves need exactly one degree of redundancy')
     limits = robot.limits
-    seeds = rng.uniform(limits[:, 0], limits[:, 1], size=(options.seeds, robot.n_joints))
-    solved, converged = project_many(robot, x, seeds, options.tolerance)
     branches: list[SelfMotionManifold] = []
-    for theta, ok in zip(solved, converged, strict=True):
-        if not ok or not _within_limits(robot, theta):
-            continue
-        theta = wrap_configuration(theta, robot.periodic)
-        if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
-            continue
-        branch = _trace_branch(robot, x, theta, options)
-        log.debug('branch %d: %d points, closed=%s', len(branches), len(branch), branch.closed)
-        branches.append(branch)
+    for _ in range(options.seed_rounds):
+        found = len(branches)
+        seeds = rng.uniform(limits[:, 0], limits[:, 1], size=(options.seeds, robot.n_joints))
+        solved, converged = project_many(robot, x, seeds, options.tolerance)
+        for theta in solved[converged]:
+            theta = wrap_configuration(theta, robot.periodic)
+            if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
+                continue
+            branch = _trace_branch(robot, x, theta, options)
+            log.debug('branch %d: %d points, closed=%s', len(branches), len(branch),
+                      branch.closed)
+            branches.append(branch)
+        if len(branches) == found:
+            break
     if not branches:
         log.info('no configuration reaches %s', x)
     return tuple(branches)
@@ -187,9 +196,15 @@ def self_motion_path(robot: Robot, x: np.ndarray, theta_from: np.ndarray,
 
 
 def mark_obstacle_free(manifold: SelfMotionManifold, checker: CollisionChecker,
-                       ) -> SelfMotionManifold:
-    """Step 2: return the branch with the clearance [m] of each of its points."""
-    return replace(manifold, clearance=checker.min_clearance(manifold.points))
+                       margin: float = 0.0) -> SelfMotionManifold:
+    """Step 2: return the branch with the clearance [m] of each of its points.
+
+    The clearances are the checker's cheap lower bounds (no tier 3, collision.py): a
+    point within a centimetre or so of an obstacle may be marked colliding, never the
+    other way round.
+    """
+    return replace(manifold, clearance=checker.min_clearance(manifold.points, margin,
+                                                             refine=False))
 
 
 def project_to_preimage(robot: Robot, x: np.ndarray, theta: np.ndarray,
@@ -208,19 +223,22 @@ def project_to_preimage(robot: Robot, x: np.ndarray, theta: np.ndarray,
 def project_many(robot: Robot, x: np.ndarray, thetas: np.ndarray, tolerance: float = 1e-10,
                  max_iterations: int = 60, fixed_joint: int | None = None,
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """`project_to_preimage` for many starts (S, n) at once: (configurations, converged (S,))."""
+    """`project_to_preimage` for many starts (S, n) at once: (configurations, converged (S,)).
+
+    Steps are clipped to the joint limits, so a converged configuration is within them.
+    """
     thetas = np.array(thetas, dtype=float)
     movable = np.ones(robot.n_joints, dtype=bool)
     if fixed_joint is not None:
         movable[fixed_joint] = False
-    eye = np.eye(len(x))
+    eye = np.eye(robot.task_dim)
     for _ in range(max_iterations):
-        residual = x - robot.forward_kinematics(thetas)  # (S, m)
+        residual, jac = task_residuals(robot, x, thetas)  # (S, m), (S, m, n)
         error = np.linalg.norm(residual, axis=1)
         active = error >= tolerance
         if not active.any():
             break
-        jac = robot.jacobian(thetas[active])[:, :, movable]  # (A, m, k)
+        jac = jac[active][:, :, movable]  # (A, m, k)
         damping = np.where(error[active] < 1e-3, 1e-6, 1e-3)[:, None, None]
         gram = jac @ np.swapaxes(jac, 1, 2) + damping * eye
         weights = np.linalg.solve(gram, residual[active][..., None])[..., 0]
@@ -229,13 +247,25 @@ def project_many(robot: Robot, x: np.ndarray, thetas: np.ndarray, tolerance: flo
         step *= np.minimum(1.0, 0.5 / np.maximum(norm, 1e-300))  # keep Newton local
         rows = np.flatnonzero(active)
         thetas[np.ix_(rows, np.flatnonzero(movable))] += step
-    error = np.linalg.norm(x - robot.forward_kinematics(thetas), axis=1)
-    return thetas, error < tolerance
+        # Stay within the joint limits: Newton projected onto them still converges to a
+        # solution inside when there is one nearby, where a free step would leave them.
+        thetas[rows] = np.where(robot.periodic, thetas[rows],
+                                np.clip(thetas[rows], robot.limits[:, 0], robot.limits[:, 1]))
+    residual, _ = task_residuals(robot, x, thetas)
+    converged = np.linalg.norm(residual, axis=1) < tolerance
+    # A tool axis that points exactly away from the goal's also zeroes its residual.
+    converged[converged] &= task_errors(robot, x, thetas[converged])[:, 1] < 1e-6
+    return thetas, converged
 
 
 def null_space_tangent(robot: Robot, theta: np.ndarray) -> np.ndarray:
-    """Return the unit null vector (n,) of the Jacobian at θ: the self-motion direction (r = 1)."""
-    return np.linalg.svd(robot.jacobian(theta))[2][-1]
+    """Return the unit null vector (n,) of the task Jacobian at θ: the self-motion direction.
+
+    The Jacobian does not depend on the task point for position and pose tasks; for a
+    tool axis it is taken across the tool's own axis.
+    """
+    x = robot.forward_kinematics(theta)
+    return np.linalg.svd(task_residuals(robot, x, theta)[1][0])[2][-1]
 
 
 def _trace_branch(robot: Robot, x: np.ndarray, seed: np.ndarray,
@@ -269,12 +299,6 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
     if status == STALLED:
         log.debug('continuation stalled at %s', points[-1])
     return list(points), status == CLOSED, period
-
-
-def _within_limits(robot: Robot, theta: np.ndarray) -> bool:
-    limits = robot.limits
-    inside = (theta >= limits[:, 0]) & (theta <= limits[:, 1])
-    return bool(np.all(inside | robot.periodic))
 
 
 def _distance_to_branch(robot: Robot, theta: np.ndarray, branch: SelfMotionManifold) -> float:

@@ -71,8 +71,10 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
     direction = b - a
     along = np.einsum('sn,sn->s', theta - a, direction) / np.maximum(
         np.einsum('sn,sn->s', direction, direction), 1e-300)
-    # A segment that moves the joint is cut at the level; a flat one is projected onto.
-    t = np.where(rise != 0.0, (level - a[:, joint]) / np.where(rise != 0.0, rise, 1.0),
+    # A segment along which the joint moves is cut at the level; one along which it hardly
+    # moves is projected onto (cutting it would divide rounding errors by a tiny rise).
+    steep = np.abs(rise) >= 1e-3 * np.linalg.norm(direction, axis=1)
+    t = np.where(steep, (level - a[:, joint]) / np.where(steep, rise, 1.0),
                  np.clip(along, 0.0, 1.0))
     points = a + t[:, None] * direction
     points[:, joint] = level

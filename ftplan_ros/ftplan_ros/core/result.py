@@ -18,8 +18,9 @@ class PlanResult:
     """A failure-tolerant plan, or why there is none.
 
     `feasible` is a guarantee, checked by `verification.verify_surface`: from every point
-    of the nominal path, with any one joint locked there, a collision-free path in that
-    joint's failure hyperplane reaches the goal within its tolerance. Angles are radians;
+    of the nominal path, with any one tolerated joint locked there, a collision-free path
+    in that joint's failure hyperplane reaches the goal within its tolerances (the
+    tolerated joints are `surface.tolerated`, by name in stats). Angles are radians;
     `theta_s` and the hits are wrapped to (-π, π] on periodic joints, while the paths
     are continuous (they may leave (-π, π] so as not to jump).
     """
@@ -47,8 +48,16 @@ class PlanResult:
         return None if self.surface is None else self.surface.nominal_path
 
     @property
+    def tolerated_joints(self) -> tuple[int, ...]:
+        """Indices of the joints whose lock the plan survives (the surface's)."""
+        return () if self.surface is None else self.surface.tolerated
+
+    @property
     def failure_plane_hits(self) -> np.ndarray | None:
-        """(n, n) [rad]: row i is the goal configuration in H_i(θ_s) ∩ M_g^F, wrapped."""
+        """Return (t, n) [rad]: row k the goal configuration in H_i(θ_s) ∩ M_g^F, wrapped.
+
+        i is the k-th tolerated joint.
+        """
         if self.surface is None:
             return None
         hits = self.surface.goal_points[list(self.surface.hit_paths)]
@@ -67,7 +76,9 @@ class PlanResult:
         A statistic that is not finite (the clearance of a scene without obstacles is
         infinite) is null: JSON has no infinity.
         """
-        out: dict = {'feasible': self.feasible, 'joint_names': list(self.joint_names)}
+        out: dict = {'feasible': self.feasible, 'joint_names': list(self.joint_names),
+                     'tolerated_joints': list(self.stats.get(
+                         'tolerated_joints', [self.joint_names[i] for i in self.tolerated_joints]))}
         if self.surface is not None:
             lower, upper = self.hypercube
             out.update({
@@ -77,8 +88,19 @@ class PlanResult:
                 'failure_plane_hits': self.failure_plane_hits.tolist(),
                 'hypercube': {'lower': lower.tolist(), 'upper': upper.tolist()},
             })
-        out['stats'] = {key: None if isinstance(value, float) and not math.isfinite(value)
-                        else value for key, value in self.stats.items()}
+        out['stats'] = {key: _json_value(value) for key, value in self.stats.items()
+                        if key != 'tolerated_joints'}
         if not self.feasible:
             out['reason'] = self.reason
         return out
+
+
+def _json_value(value):
+    """Return a statistic as JSON can hold it: non-finite floats become null, also in lists."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: _json_value(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_value(item) for item in value]
+    return value

@@ -1,8 +1,10 @@
 """Robot models behind one small interface: the kinematic function f of the paper (Sec. II).
 
-The algorithm only uses what `Robot` declares, so a spatial chain plugs in beside
-`PlanarChain` without touching it. Configurations are arrays of shape (n,) or (..., n)
-in radians; positions are in metres in the robot base frame.
+The algorithm only uses what `Robot` declares, so the planar chain of the paper and
+spatial chains from URDF or DH (spatial.py) go through the same code. Configurations
+are arrays of shape (n,) or (..., n) in radians; positions are in metres in the robot
+base frame. `task_residuals` and `task_errors` are the task-error map every algorithm
+uses: none writes x - f(θ) itself.
 """
 
 from __future__ import annotations
@@ -11,27 +13,36 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol
 
-import numba
 import numpy as np
 
+from . import kernels
 from .errors import InputError
+from .geometry import Shape, transform
 
-PLANAR = 0  # `Robot.kernel_kind` of PlanarChain
+# Takes a capsule's core segment from its local z axis onto the link's x axis.
+_Z_TO_X = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 
 
 class Robot(Protocol):
-    """What the planner needs to know about an arm."""
+    """What the planner needs to know about an arm bound to a kind of task.
+
+    Joints are revolute, numbered 0..n-1 from the base. Links are numbered 0..L-1: link
+    0 is the base (it never moves) and link j >= 1 is turned by joints 0..j-1.
+    """
 
     joint_names: tuple[str, ...]
-    link_radius: float
 
     @property
     def n_joints(self) -> int:
         """Number of joints n."""
 
     @property
+    def task_kind(self) -> str:
+        """What the tool must do: 'planar', 'position', 'axis' or 'pose' (task_space.py)."""
+
+    @property
     def task_dim(self) -> int:
-        """Dimension m of the end-effector position x = f(θ)."""
+        """Dimension m of the task (2 planar, 3 position, 5 axis, 6 pose); r = n - m."""
 
     @property
     def periodic(self) -> np.ndarray:
@@ -42,42 +53,66 @@ class Robot(Protocol):
         """(n, 2) lower and upper joint limits [rad]; (-π, π] for periodic joints."""
 
     def forward_kinematics(self, thetas: np.ndarray) -> np.ndarray:
-        """End-effector position (..., m) [m] of configurations (..., n) [rad]."""
-
-    def jacobian(self, thetas: np.ndarray) -> np.ndarray:
-        """Position Jacobian (..., m, n) [m/rad] of configurations (..., n) [rad]."""
+        """Task points (..., k) of configurations (..., n) [rad] (task_space.point_size)."""
 
     @property
     def kernel_kind(self) -> int:
-        """Which compiled kinematics `chain_kinematics` runs for this robot (e.g. PLANAR)."""
+        """Which compiled task map `kernels.task_residual` runs for this robot."""
 
     @property
     def kernel_parameters(self) -> np.ndarray:
-        """The float array that `chain_kinematics` takes as this robot's parameters."""
+        """The float array that `kernels.task_residual` takes as this robot's parameters."""
 
-    def link_segments(self, thetas: np.ndarray) -> np.ndarray:
-        """Core segments (..., L, 2, 3) [m] of the L link capsules, in the base frame."""
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """Names of the L links, the base first."""
 
-    def link_lever_arms(self) -> np.ndarray:
-        """(L, n) bound [m] on the distance from joint a's axis to any point of link j.
+    def link_frames(self, thetas: np.ndarray) -> np.ndarray:
+        """Frames (..., L, 4, 4) of the links in the base frame at configurations (..., n)."""
 
-        Row j, column a bounds how fast link j moves when joint a turns: a point of link
-        j moves at most Σ_a R[j, a] |Δθ_a| along a straight joint-space segment Δθ.
+    @property
+    def collision_shapes(self) -> tuple[LinkShape, ...]:
+        """The links' collision geometry, each shape posed in its link's frame."""
+
+    @property
+    def self_collision_pairs(self) -> tuple[tuple[int, int], ...]:
+        """Link pairs (a, b), a < b, whose distance must stay positive."""
+
+    def frame_lever_arms(self) -> np.ndarray:
+        """(L, n) bound [m] on the distance from joint a's axis to the origin of link j's frame.
+
+        Zero where joint a does not turn link j (a >= j). With the extent of a shape from
+        its link's origin added, it bounds how fast the shape moves when joint a turns:
+        a point of it moves at most Σ_a (R[j, a] + extent) |Δθ_a| along a straight
+        joint-space segment Δθ (collision.py).
         """
 
     def tip_lever_arms(self) -> np.ndarray:
-        """(n,) bound [m] on the distance from each joint axis to the end effector."""
+        """(n,) bound [m] on the distance from each joint axis to the tool point."""
+
+    def skeleton(self, thetas: np.ndarray) -> np.ndarray:
+        """Points (..., k, 3) [m] to draw the arm by: base, joints, tool."""
 
     def can_reach(self, x: np.ndarray) -> bool:
-        """Whether some configuration puts the end effector at x (m,) [m]."""
+        """Whether the task point x might be reachable (a quick necessary check)."""
+
+
+@dataclass(frozen=True, eq=False)
+class LinkShape:
+    """A collision shape of link `link`, posed by `placement` (4, 4) in the link's frame."""
+
+    link: int
+    shape: Shape
+    placement: np.ndarray
 
 
 @dataclass(frozen=True)
 class PlanarChain:
     """A planar serial chain of n revolute joints with parallel axes (z) in the plane z = 0.
 
-    Link k runs from joint k to joint k+1 (the last link ends at the end effector); its
-    capsule has radius `link_radius` [m] around that segment. Joints without limits wrap.
+    Link k (1..n) runs from joint k-1 to joint k (the last link ends at the end effector);
+    its capsule has radius `link_radius` [m] around that segment. Joints without limits
+    wrap.
     """
 
     link_lengths: tuple[float, ...]
@@ -141,44 +176,65 @@ class PlanarChain:
         return np.stack([np.sum(lengths * np.cos(phi), axis=-1),
                          np.sum(lengths * np.sin(phi), axis=-1)], axis=-1)
 
-    def jacobian(self, thetas: np.ndarray) -> np.ndarray:
-        """Position Jacobian (..., 2, n) [m/rad]: column a sums the links from joint a on."""
-        phi = self._absolute_angles(thetas)
-        lengths = np.asarray(self.link_lengths)
-        # Reverse cumulative sums: joint a moves every link k >= a.
-        dx = -np.cumsum((lengths * np.sin(phi))[..., ::-1], axis=-1)[..., ::-1]
-        dy = np.cumsum((lengths * np.cos(phi))[..., ::-1], axis=-1)[..., ::-1]
-        return np.stack([dx, dy], axis=-2)
+    @property
+    def task_kind(self) -> str:
+        """A planar arm positions its tool in the plane."""
+        return 'planar'
 
     @property
     def kernel_kind(self) -> int:
-        """PLANAR: `chain_kinematics` runs `planar_kinematics`."""
-        return PLANAR
+        """PLANAR: `kernels.task_residual` runs `planar_kinematics`."""
+        return kernels.PLANAR
 
     @cached_property
     def kernel_parameters(self) -> np.ndarray:
         """The link lengths (n,) [m], the parameters of `planar_kinematics`."""
         return np.array(self.link_lengths, dtype=float)
 
-    def link_segments(self, thetas: np.ndarray) -> np.ndarray:
-        """Core segments (..., n, 2, 3) [m] of the link capsules, at z = 0."""
-        points = self.joint_positions(thetas)
-        points = np.concatenate([points, np.zeros(points.shape[:-1] + (1,))], axis=-1)
-        return np.stack([points[..., :-1, :], points[..., 1:, :]], axis=-2)
+    @cached_property
+    def link_names(self) -> tuple[str, ...]:
+        """'base', then 'link1'..'linkn'."""
+        return ('base',) + tuple(f'link{k + 1}' for k in range(self.n_joints))
 
-    def link_lever_arms(self) -> np.ndarray:
-        """(n, n) R[j, a] = Σ_{k=a..j} ℓ_k [m]: farthest point of link j from joint a."""
+    def link_frames(self, thetas: np.ndarray) -> np.ndarray:
+        """Frames (..., n+1, 4, 4): the base, then link k at joint k-1 with x along the link."""
+        thetas = np.asarray(thetas, dtype=float)
+        flat = np.ascontiguousarray(thetas.reshape(-1, self.n_joints))
+        frames = kernels.planar_frames(self.kernel_parameters, flat)
+        return frames.reshape(thetas.shape[:-1] + frames.shape[1:])
+
+    @cached_property
+    def collision_shapes(self) -> tuple[LinkShape, ...]:
+        """A capsule of radius `link_radius` along each link; the base is a ball of it."""
+        base = LinkShape(0, Shape('sphere', radius=self.link_radius), np.eye(4))
+        return (base,) + tuple(
+            LinkShape(k + 1, Shape('capsule', radius=self.link_radius, length=length),
+                      transform(_Z_TO_X, (0.5 * length, 0.0, 0.0)))
+            for k, length in enumerate(self.link_lengths))
+
+    @property
+    def self_collision_pairs(self) -> tuple[tuple[int, int], ...]:
+        """None: the paper's arm folds onto itself."""
+        return ()
+
+    def frame_lever_arms(self) -> np.ndarray:
+        """(n+1, n) R[j, a] = Σ_{k=a..j-2} ℓ_k [m]: joint a to link j's origin (joint j-1)."""
         lengths = np.asarray(self.link_lengths)
         n = self.n_joints
-        arms = np.zeros((n, n))
-        for j in range(n):
-            for a in range(j + 1):
-                arms[j, a] = lengths[a:j + 1].sum()
+        arms = np.zeros((n + 1, n))
+        for j in range(1, n + 1):
+            for a in range(j):
+                arms[j, a] = lengths[a:j - 1].sum()
         return arms
 
     def tip_lever_arms(self) -> np.ndarray:
         """(n,) Σ_{k>=a} ℓ_k [m]: farthest the end effector can be from joint a."""
         return np.cumsum(np.asarray(self.link_lengths)[::-1])[::-1].copy()
+
+    def skeleton(self, thetas: np.ndarray) -> np.ndarray:
+        """Return base, joints and end effector (..., n+1, 3) [m], at z = 0."""
+        points = self.joint_positions(thetas)
+        return np.concatenate([points, np.zeros(points.shape[:-1] + (1,))], axis=-1)
 
     def can_reach(self, x: np.ndarray) -> bool:
         """Whether x (2,) [m] lies in the annulus the chain sweeps."""
@@ -188,38 +244,26 @@ class PlanarChain:
         return bool(inner - 1e-12 <= np.linalg.norm(x) <= outer + 1e-12)
 
 
-@numba.njit(cache=True)
-def planar_kinematics(lengths: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """End-effector position (2,) [m] and Jacobian (2, n) [m/rad] of a planar chain.
+def task_residuals(robot: Robot, x: np.ndarray, thetas: np.ndarray,
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals (N, m) of configurations (N, n) [rad] against task point x, and Jacobians.
 
-    :param lengths: (n,) link lengths [m]; joint k turns links k..n-1.
-    :param theta: (n,) joint angles [rad].
+    A Newton step δθ (n,) solves J δθ = residual (kernels.task_residual says how each
+    task measures it); the Jacobians are (N, m, n).
     """
-    n = theta.shape[0]
-    xs = np.empty(n)
-    ys = np.empty(n)
-    phi = 0.0
-    for k in range(n):
-        phi += theta[k]
-        xs[k] = lengths[k] * np.cos(phi)
-        ys[k] = lengths[k] * np.sin(phi)
-    position = np.zeros(2)
-    jac = np.empty((2, n))
-    for k in range(n - 1, -1, -1):  # joint k moves links k..n-1
-        position[0] += xs[k]
-        position[1] += ys[k]
-        jac[0, k] = -position[1]
-        jac[1, k] = position[0]
-    return position, jac
+    thetas = np.ascontiguousarray(np.atleast_2d(thetas), dtype=float)
+    return kernels.task_residuals(robot.kernel_kind, robot.kernel_parameters,
+                                  np.asarray(x, dtype=float), thetas, robot.task_dim)
 
 
-@numba.njit(cache=True)
-def chain_kinematics(kind: int, parameters: np.ndarray, theta: np.ndarray,
-                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Position (m,) [m] and Jacobian (m, n) [m/rad] of θ (n,) [rad], compiled, by robot kind.
+def task_errors(robot: Robot, x: np.ndarray, thetas: np.ndarray) -> np.ndarray:
+    """Distances (..., 2) of configurations (..., n) [rad] from task point x.
 
-    The compiled kernels (continuation.py) call this; a new kind of chain adds its branch.
+    Column 0 is the tool's distance [m] from x's position, column 1 the angle [rad]
+    between the tool's orientation (or axis) and x's (0 for position tasks).
     """
-    if kind == PLANAR:
-        return planar_kinematics(parameters, theta)
-    raise ValueError('no compiled kinematics for this kind of robot')
+    thetas = np.asarray(thetas, dtype=float)
+    flat = np.ascontiguousarray(thetas.reshape(-1, thetas.shape[-1]))
+    out = kernels.task_errors(robot.kernel_kind, robot.kernel_parameters,
+                              np.asarray(x, dtype=float), flat)
+    return out.reshape(thetas.shape[:-1] + (2,))

@@ -1,22 +1,32 @@
 """Scenes: the robot, its static obstacles and the task, loaded from YAML and validated.
 
-The format is the one in CONTRACT.md (`robot`, `obstacles`, `task`); every value is
-checked and a bad one raises `InputError` naming its field, e.g. `obstacles[2].radius`.
-Units are metres and radians.
+The format is the one in CONTRACT.md (`robot`, `obstacles`, `task`, `tolerate`); every
+value is checked and a bad one raises `InputError` naming its field, e.g.
+`obstacles[2].radius`. Robots are planar chains (`type: planar`), URDF files (`type:
+urdf`, parsed by Pinocchio) or DH tables (`type: dh`); a task's form says its kind:
+`[x, y]` planar, `[x, y, z]` a 3-D position, `{position, orientation}` a 6-D pose,
+`{position, axis}` a tool axis. Units are metres and radians.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
+from .chain import ChainModel
+from .dh import DHRow, chain_from_dh
 from .errors import InputError
-from .robot import PlanarChain
+from .robot import PlanarChain, Robot
+from .self_collision import default_disabled_pairs
+from .spatial import SpatialArm
+from .task_space import POINT_SIZE, unit_vector
+from .urdf import chain_from_urdf
 
 OBSTACLE_TYPES = ('sphere', 'box', 'cylinder')
 # [m or rad] Largest magnitude of any number: the clearance bounds allow for float rounding
@@ -41,33 +51,72 @@ class Obstacle:
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
+DEFAULT_GOAL_TOLERANCE = 0.01  # [m]
+DEFAULT_ORIENTATION_TOLERANCE = 0.01  # [rad]
+_KIND_OF_SIZE = {size: kind for kind, size in POINT_SIZE.items()}
+
+
 @dataclass(frozen=True)
 class Task:
-    """Move the end effector from `start` to `goal` [m], arriving within `goal_tolerance` [m]."""
+    """Move the tool from task point `start` to `goal` (task_space.py).
+
+    It must arrive within `goal_tolerance` [m] of the goal's position and
+    `orientation_tolerance` [rad] of its orientation or axis (pose and axis tasks).
+    """
 
     start: tuple[float, ...]
     goal: tuple[float, ...]
-    goal_tolerance: float = 0.01
+    goal_tolerance: float = DEFAULT_GOAL_TOLERANCE
+    orientation_tolerance: float = DEFAULT_ORIENTATION_TOLERANCE
+
+    @property
+    def kind(self) -> str:
+        """'planar', 'position', 'axis' or 'pose', from the size of the task points."""
+        return _KIND_OF_SIZE[len(self.goal)]
+
+    def reached(self, errors: np.ndarray) -> np.ndarray:
+        """Whether task errors (..., 2) [m, rad] (`robot.task_errors`) are within tolerance."""
+        errors = np.asarray(errors, dtype=float)
+        return ((errors[..., 0] <= self.goal_tolerance)
+                & (errors[..., 1] <= self.orientation_tolerance))
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A robot among obstacles, with an optional task."""
+    """A robot among obstacles, with an optional task.
 
-    robot: PlanarChain
+    `tolerate` names the joints whose lock a plan must survive (None: all of them).
+    """
+
+    robot: Robot
     obstacles: tuple[Obstacle, ...] = ()
     task: Task | None = None
     frame_id: str = 'base_link'
     name: str = field(default='scene', compare=False)
+    tolerate: tuple[str, ...] | None = None
 
     def with_obstacles(self, obstacles: Sequence[Obstacle]) -> Scene:
         """Return this scene with `obstacles` added to its static ones."""
-        return Scene(self.robot, self.obstacles + tuple(obstacles), self.task,
-                     self.frame_id, self.name)
+        return replace(self, obstacles=self.obstacles + tuple(obstacles))
 
-    def with_task(self, task: Task) -> Scene:
-        """Return this scene with its task replaced."""
-        return Scene(self.robot, self.obstacles, task, self.frame_id, self.name)
+    def with_task(self, task: Task | None) -> Scene:
+        """Return this scene with its task replaced (a spatial arm takes up its kind)."""
+        robot = self.robot
+        if task is not None and isinstance(robot, SpatialArm):
+            robot = robot.with_task_kind(task.kind)
+        return replace(self, robot=robot, task=task)
+
+    def with_tolerated(self, joints: Sequence[str] | None) -> Scene:
+        """Return this scene tolerating the locks of `joints` (None: all)."""
+        return replace(self, tolerate=None if joints is None else tuple(joints))
+
+    @property
+    def tolerated_joints(self) -> tuple[int, ...]:
+        """Indices of the joints whose lock the plan must survive."""
+        names = self.robot.joint_names
+        if self.tolerate is None:
+            return tuple(range(len(names)))
+        return tuple(names.index(name) for name in self.tolerate)
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -93,42 +142,75 @@ def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None) -
     """Validate a scene given as plain data (what `yaml.safe_load` returns).
 
     `robot` is a mapping, or the path of a robot YAML file (holding one `robot` mapping)
-    relative to `directory`, the scene file's folder.
+    relative to `directory`, the scene file's folder; a URDF's `file` is relative to the
+    file that names it.
     """
     data = _mapping(data, 'scene')
-    _check_keys(data, 'scene', required=('robot',), optional=('obstacles', 'task', 'frame_id'))
+    _check_keys(data, 'scene', required=('robot',),
+                optional=('obstacles', 'task', 'frame_id', 'tolerate'))
+    directory = Path(directory or '.')
     robot_data = data['robot']
     if isinstance(robot_data, str):
-        robot_data = _robot_file(Path(directory or '.') / robot_data)
-    robot = parse_robot(robot_data)
+        robot_data, directory_of_robot = _robot_file(directory / robot_data)
+    else:
+        directory_of_robot = directory
+    robot = parse_robot(robot_data, directory_of_robot)
     frame_id = data.get('frame_id', 'base_link')
     if not isinstance(frame_id, str) or not frame_id:
         raise InputError('frame_id', 'must be a non-empty string')
     obstacles = tuple(
         parse_obstacle(item, f'obstacles[{k}]')
         for k, item in enumerate(_sequence(data.get('obstacles') or [], 'obstacles')))
-    task = None if data.get('task') is None else parse_task(data['task'], robot)
-    return Scene(robot, obstacles, task, frame_id, name)
+    scene = Scene(robot, obstacles, None, frame_id, name,
+                  parse_tolerated(data.get('tolerate'), robot.joint_names))
+    return scene if data.get('task') is None else scene.with_task(parse_task(data['task'], robot))
 
 
-def _robot_file(path: Path) -> Any:
+def parse_tolerated(data: Any, joint_names: Sequence[str], where: str = 'tolerate',
+                    ) -> tuple[str, ...] | None:
+    """Validate a list of joint names whose locks a plan must survive (None: all joints)."""
+    if data is None:
+        return None
+    names = _sequence(data, where)
+    if not names:
+        raise InputError(where, 'names no joint: leave it out to tolerate every joint')
+    for k, joint in enumerate(names):
+        if joint not in joint_names:
+            raise InputError(f'{where}[{k}]', f'unknown joint {joint!r} (joints: '
+                             f'{", ".join(joint_names)})')
+    if len(set(names)) != len(names):
+        raise InputError(where, 'names a joint twice')
+    return tuple(sorted(names, key=list(joint_names).index))
+
+
+def _robot_file(path: Path) -> tuple[Any, Path]:
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
         raise InputError('robot', f'cannot read robot file {path.name}: {error}') from None
     data = _mapping(data, f'robot file {path.name}')
     _check_keys(data, f'robot file {path.name}', required=('robot',), optional=())
-    return data['robot']
+    return data['robot'], path.parent
 
 
-def parse_robot(data: Any) -> PlanarChain:
-    """Validate the `robot` section; only `type: planar` is implemented so far."""
+def parse_robot(data: Any, directory: Path | None = None) -> Robot:
+    """Validate the `robot` section: `type` planar, urdf or dh; files relative to `directory`.
+
+    A spatial robot comes bound to pose tasks; `Scene.with_task` rebinds it to the task's
+    kind.
+    """
     data = _mapping(data, 'robot')
     kind = data.get('type')
-    if kind in ('dh', 'urdf'):
-        raise InputError('robot.type', f'"{kind}" robots are not supported yet; use "planar"')
-    if kind != 'planar':
-        raise InputError('robot.type', f'must be "planar", got {kind!r}')
+    if kind == 'planar':
+        return _planar_robot(data)
+    if kind == 'urdf':
+        return SpatialArm(_urdf_chain(data, Path(directory or '.')))
+    if kind == 'dh':
+        return SpatialArm(_dh_chain(data))
+    raise InputError('robot.type', f'must be "planar", "urdf" or "dh", got {kind!r}')
+
+
+def _planar_robot(data: Mapping) -> PlanarChain:
     _check_keys(data, 'robot', required=('type', 'link_lengths'),
                 optional=('link_radius', 'joint_names', 'joint_limits'))
     lengths = _vector(data['link_lengths'], 'robot.link_lengths')
@@ -137,11 +219,90 @@ def parse_robot(data: Any) -> PlanarChain:
     for k, value in enumerate(lengths):
         if value <= 0.0:
             raise InputError(f'robot.link_lengths[{k}]', f'must be > 0, got {value}')
+    radius = _link_radius(data)
+    n = len(lengths)
+    names = _joint_names(data.get('joint_names'), n)
+    limits = data.get('joint_limits')
+    if limits is not None:
+        limits = _sequence(limits, 'robot.joint_limits')
+        if len(limits) != n:
+            raise InputError('robot.joint_limits', f'has {len(limits)} entries for {n} joints')
+        limits = tuple(_joint_limit(item, f'robot.joint_limits[{k}]')
+                       for k, item in enumerate(limits))
+    return PlanarChain(tuple(lengths), tuple(names), radius, limits)
+
+
+def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
+    _check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
+                optional=('base_link', 'tip_offset', 'disabled_collisions'))
+    if not isinstance(data['file'], str) or not data['file']:
+        raise InputError('robot.file', 'must be the path of a URDF file')
+    path = directory / data['file']
+    try:
+        xml = path.read_text()
+    except OSError as error:
+        raise InputError('robot.file', f'cannot read {path.name} ({error.strerror})') from None
+    except UnicodeDecodeError:
+        raise InputError('robot.file', f'{path.name} is not UTF-8 text') from None
+    for key in ('base_link', 'tip_link'):
+        if key in data and (not isinstance(data[key], str) or not data[key]):
+            raise InputError(f'robot.{key}', 'must be a link name')
+    offset = _vector(data.get('tip_offset', [0.0, 0.0, 0.0]), 'robot.tip_offset', length=3)
+    model = chain_from_urdf(xml, data['tip_link'], data.get('base_link'), offset,
+                            mesh_dirs=[str(path.parent), str(path.parent.parent)])
+    return with_disabled_collisions(model, data.get('disabled_collisions'))
+
+
+def _dh_chain(data: Mapping) -> ChainModel:
+    _check_keys(data, 'robot', required=('type', 'rows'),
+                optional=('link_radius', 'joint_names', 'tip_offset', 'disabled_collisions'))
+    rows = []
+    for k, row in enumerate(_sequence(data['rows'], 'robot.rows')):
+        where = f'robot.rows[{k}]'
+        row = _mapping(row, where)
+        _check_keys(row, where, required=('a', 'alpha', 'd'), optional=('offset', 'limits'))
+        values = {key: _number(row.get(key, 0.0), f'{where}.{key}')
+                  for key in ('a', 'alpha', 'd', 'offset')}
+        rows.append(DHRow(**values, limits=_joint_limit(row.get('limits'), f'{where}.limits')))
+    if not rows:
+        raise InputError('robot.rows', 'needs at least one joint')
+    offset = _vector(data.get('tip_offset', [0.0, 0.0, 0.0]), 'robot.tip_offset', length=3)
+    model = chain_from_dh(rows, _joint_names(data.get('joint_names'), len(rows)),
+                          _link_radius(data), offset)
+    return with_disabled_collisions(model, data.get('disabled_collisions'))
+
+
+def with_disabled_collisions(model: ChainModel, data: Any) -> ChainModel:
+    """Return the model with its self-collision exceptions: `data` lists link-name pairs.
+
+    Without a list, adjacent links and links that touch at the reference configuration
+    are exempt (self_collision.py; `tools/self_collision_pairs.py` writes a full list).
+    """
+    if data is None:
+        return replace(model, disabled_pairs=default_disabled_pairs(model))
+    pairs = set()
+    for k, pair in enumerate(_sequence(data, 'robot.disabled_collisions')):
+        names = _sequence(pair, f'robot.disabled_collisions[{k}]')
+        if len(names) != 2:
+            raise InputError(f'robot.disabled_collisions[{k}]', 'must be two link names')
+        indices = []
+        for name in names:
+            if name not in model.link_names:
+                raise InputError(f'robot.disabled_collisions[{k}]', f'unknown link {name!r} '
+                                 f'(links of the chain: {", ".join(model.link_names)})')
+            indices.append(model.link_names.index(name))
+        pairs.add(tuple(sorted(indices)))
+    return replace(model, disabled_pairs=frozenset(pairs))
+
+
+def _link_radius(data: Mapping) -> float:
     radius = _number(data.get('link_radius', 0.0), 'robot.link_radius')
     if radius < 0.0:
         raise InputError('robot.link_radius', f'must be >= 0, got {radius}')
-    n = len(lengths)
-    names = data.get('joint_names')
+    return radius
+
+
+def _joint_names(names: Any, n: int) -> list[str]:
     names = [f'joint{k + 1}' for k in range(n)] if names is None else names
     names = _sequence(names, 'robot.joint_names')
     if len(names) != n:
@@ -151,14 +312,7 @@ def parse_robot(data: Any) -> PlanarChain:
             raise InputError(f'robot.joint_names[{k}]', 'must be a non-empty string')
     if len(set(names)) != n:
         raise InputError('robot.joint_names', 'names must be unique')
-    limits = data.get('joint_limits')
-    if limits is not None:
-        limits = _sequence(limits, 'robot.joint_limits')
-        if len(limits) != n:
-            raise InputError('robot.joint_limits', f'has {len(limits)} entries for {n} joints')
-        limits = tuple(_joint_limit(item, f'robot.joint_limits[{k}]')
-                       for k, item in enumerate(limits))
-    return PlanarChain(tuple(lengths), tuple(names), radius, limits)
+    return names
 
 
 def parse_obstacle(data: Any, where: str) -> Obstacle:
@@ -195,21 +349,60 @@ def parse_obstacle(data: Any, where: str) -> Obstacle:
     return Obstacle('cylinder', center, radius=radius, length=length, rpy=rpy)
 
 
-def parse_task(data: Any, robot: PlanarChain) -> Task:
-    """Validate the `task` section against the robot's workspace dimension m."""
+def parse_task(data: Any, robot: Robot) -> Task:
+    """Validate the `task` section; its form sets the kind (see the module docstring)."""
     data = _mapping(data, 'task')
-    _check_keys(data, 'task', required=('start', 'goal'), optional=('goal_tolerance',))
-    start = _vector(data['start'], 'task.start', length=robot.task_dim)
-    goal = _vector(data['goal'], 'task.goal', length=robot.task_dim)
-    tolerance = _number(data.get('goal_tolerance', 0.01), 'task.goal_tolerance')
+    _check_keys(data, 'task', required=('start', 'goal'),
+                optional=('goal_tolerance', 'orientation_tolerance'))
+    start = parse_task_point(data['start'], 'task.start', robot)
+    goal = parse_task_point(data['goal'], 'task.goal', robot)
+    if len(start) != len(goal):
+        raise InputError('task.goal', 'must have the same form as task.start')
+    tolerance = _number(data.get('goal_tolerance', DEFAULT_GOAL_TOLERANCE),
+                        'task.goal_tolerance')
     if tolerance <= 0.0:
         raise InputError('task.goal_tolerance', f'must be > 0, got {tolerance}')
-    return Task(tuple(start), tuple(goal), tolerance)
+    angle = _number(data.get('orientation_tolerance', DEFAULT_ORIENTATION_TOLERANCE),
+                    'task.orientation_tolerance')
+    if angle <= 0.0:
+        raise InputError('task.orientation_tolerance', f'must be > 0, got {angle}')
+    return Task(start, goal, tolerance, angle)
+
+
+def parse_task_point(data: Any, where: str, robot: Robot) -> tuple[float, ...]:
+    """Validate a task point for the robot: [x, y] (planar), [x, y, z], or a mapping.
+
+    A mapping holds `position` [x, y, z] and `orientation` [qx, qy, qz, qw] (a unit
+    quaternion) or `axis` (a unit vector).
+    """
+    planar = isinstance(robot, PlanarChain)
+    if not isinstance(data, Mapping):
+        point = _vector(data, where, length=2 if planar else 3)
+        return tuple(point)
+    if planar:
+        raise InputError(where, 'a planar arm takes [x, y]')
+    _check_keys(data, where, required=('position',), optional=('orientation', 'axis'))
+    position = _vector(data['position'], f'{where}.position', length=3)
+    if ('orientation' in data) == ('axis' in data):
+        raise InputError(where, 'needs exactly one of orientation (a pose) or axis (a tool '
+                         'axis); give [x, y, z] for a position')
+    key = 'orientation' if 'orientation' in data else 'axis'
+    values = _vector(data[key], f'{where}.{key}', length=4 if key == 'orientation' else 3)
+    try:
+        unit = unit_vector(values, 'a quaternion' if key == 'orientation' else 'an axis')
+    except ValueError as error:
+        raise InputError(f'{where}.{key}', str(error)) from None
+    return tuple(position) + tuple(float(v) for v in unit)
 
 
 def scene_to_dict(scene: Scene) -> dict:
-    """Return the scene as plain data in the YAML format `parse_scene` reads."""
+    """Return a planar scene as plain data in the YAML format `parse_scene` reads.
+
+    Spatial robots come from files: give their scene files instead (ValueError).
+    """
     robot = scene.robot
+    if not isinstance(robot, PlanarChain):
+        raise ValueError('only planar scenes are written back to YAML')
     out: dict[str, Any] = {
         'robot': {'type': 'planar', 'link_lengths': list(robot.link_lengths),
                   'link_radius': robot.link_radius, 'joint_names': list(robot.joint_names),
@@ -219,6 +412,8 @@ def scene_to_dict(scene: Scene) -> dict:
     }
     if scene.frame_id != 'base_link':
         out['frame_id'] = scene.frame_id
+    if scene.tolerate is not None:
+        out['tolerate'] = list(scene.tolerate)
     if scene.task is not None:
         out['task'] = {'start': list(scene.task.start), 'goal': list(scene.task.goal),
                        'goal_tolerance': scene.task.goal_tolerance}

@@ -1,20 +1,27 @@
 """The self-check: a plan is only called failure-tolerant after its guarantee is proved.
 
-`feasible: true` claims that from every point of the nominal path, with any one joint
-locked there, a collision-free path in that joint's failure hyperplane reaches x_g. The
-proof has three parts, each checked here rather than trusted:
+`feasible: true` claims that from every point of the nominal path, with any one
+tolerated joint locked there, a collision-free path in that joint's failure hyperplane
+reaches the goal. The proof has three parts, each checked here rather than trusted:
 
 1. Every triangle of S_F is collision-free, over the continuum: a triangle is certified
-   when the clearance of each link at its centroid exceeds how far that link can move
-   inside it (Σ_a R[j, a] · max |θ_a - centroid_a|, `Robot.link_lever_arms`); otherwise
-   it is split in four, down to a depth limit.
-2. Every point of the goal row (the goal points and the chords between them) is within the
-   goal tolerance of x_g: sampled errors plus a second-order bound between samples.
-3. A recovery path exists for every lock: the nominal path is monotonic in every joint,
-   the bottom row is exactly θ_s and the path to θ_{H_i} keeps θ_i = θ_s,i exactly (the
-   argument in `recovery.py`); and, as a check of the implementation, `recover` is run
-   at sampled moments of the nominal path for every joint and each path it returns is
-   certified collision-free and arriving, like part 1.
+   when every clearance channel at its centroid (each link against the obstacles, each
+   self-collision pair; collision.py) exceeds how far that channel can change inside it
+   (Σ_a R[c, a] · max |θ_a - centroid_a|, `CollisionChecker.lever_arms`); otherwise it
+   is split in four, down to a depth limit.
+2. Every point of the goal row (the goal points and the chords between them) is within
+   the goal tolerances: the position error sampled plus a second-order bound between
+   samples, the orientation error sampled plus a first-order bound (the tool turns at
+   most Σ_a |θ̇_a|: every joint axis is a unit vector).
+3. A recovery path exists for every lock of a tolerated joint: the nominal path is
+   monotonic in every joint, the bottom row is exactly θ_s and the path to θ_{H_i} keeps
+   θ_i = θ_s,i exactly (the argument in `recovery.py`); and, as a check of the
+   implementation, `recover` is run at sampled moments of the nominal path for every
+   tolerated joint and each path it returns is certified collision-free and arriving,
+   like part 1.
+
+Every number that enters is checked to be finite: a NaN or infinity anywhere fails the
+check.
 """
 
 from __future__ import annotations
@@ -28,7 +35,8 @@ from .collision import CollisionChecker
 from .failure_surface import FailureSurface
 from .paths import point_at_fraction
 from .recovery import recover
-from .robot import Robot
+from .robot import Robot, task_errors
+from .scene import Task
 
 # Certified clearance must beat the motion bound by this much [m]: absorbs the rounding
 # of the clearance computation (about 1e-8 m near contact).
@@ -41,7 +49,7 @@ class VerificationOptions:
 
     margin: float = 0.0           # clearance [m] every certified configuration must exceed
     max_depth: int = 7            # splits of a simplex before giving up on certifying it
-    chord_samples: int = 8        # samples per goal-row chord for the goal-error bound
+    chord_samples: int = 8        # least samples per goal-row chord for the goal-error bound
     recovery_moments: int = 5     # sampled moments of the nominal path for explicit recovery
 
     def __post_init__(self):
@@ -61,6 +69,7 @@ class Verdict:
     min_clearance: float = float('nan')       # [m] smallest clearance sampled on S_F
     recovery_min_clearance: float = float('nan')  # [m] smallest on the sampled recoveries
     max_goal_error: float = float('nan')     # [m] bound on the goal row's distance to x_g
+    max_orientation_error: float = float('nan')  # [rad] the same for its orientation
     clearance_samples: int = 0
 
 
@@ -72,22 +81,24 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
     Returns (ok, index of the first simplex that failed or -1, smallest clearance sampled
     [m], number of clearance samples).
     """
-    arms = checker.robot.link_lever_arms()
+    arms = checker.lever_arms()
     roots = np.arange(len(corners))
     smallest = np.inf
     samples = 0
+    if not np.all(np.isfinite(corners)):
+        return False, int(np.flatnonzero(~np.isfinite(corners).all(axis=(1, 2)))[0]), np.nan, 0
     for _ in range(max_depth + 1):
         if len(corners) == 0:
             return True, -1, float(smallest), samples
         centroids = corners.mean(axis=1)
-        clearance = checker.clearance(centroids)  # (S, L)
+        spread = np.max(np.abs(corners - centroids[:, None, :]), axis=1)  # (S, n)
+        motion = spread @ arms.T  # (S, C): how far each channel can change inside the simplex
+        clearance = checker.clearance(centroids, needed=margin + motion + _ROUNDING)
         samples += len(centroids)
         smallest = min(smallest, float(clearance.min()))
         hit = np.flatnonzero(np.any(~(clearance > margin), axis=1))  # NaN counts as a hit
         if len(hit):
             return False, int(roots[hit[0]]), float(smallest), samples
-        spread = np.max(np.abs(corners - centroids[:, None, :]), axis=1)  # (S, n)
-        motion = spread @ arms.T  # (S, L): how far each link can move inside the simplex
         open_ = np.flatnonzero(np.any(~(clearance - margin > motion + _ROUNDING), axis=1))
         corners, roots = _split(corners[open_]), np.repeat(roots[open_], _pieces(corners))
     if len(corners) == 0:
@@ -95,25 +106,37 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
     return False, int(roots[0]), float(smallest), samples
 
 
-def goal_row_error(robot: Robot, x_goal: np.ndarray, goal_points: np.ndarray,
-                   samples: int) -> float:
-    """Bound [m] on |f(θ) - x_g| over the chords joining consecutive goal points (K, n).
+def goal_row_error(robot: Robot, task: Task, goal_points: np.ndarray, samples: int,
+                   ) -> tuple[float, float]:
+    """Bounds ([m], [rad]) on the goal row's distance from the goal, position and orientation.
 
-    The error is evaluated at `samples` + 1 points per chord; between two samples of a
-    chord with step δ (n,), f leaves its linear interpolation by at most
-    (1/8) Σ_{a,b} R_tip[max(a, b)] |δ_a| |δ_b| (`Robot.tip_lever_arms`).
+    The goal row is the polyline through the goal points (K, n). The errors are
+    evaluated at enough points per chord (at least `samples` + 1, and enough that the
+    orientation's first-order term stays below a quarter of its tolerance); between two
+    samples of a chord with step δ (n,), the tool leaves the linear interpolation of its
+    position by at most (1/8) Σ_{a,b} R_tip[max(a, b)] |δ_a| |δ_b| (`Robot.tip_lever_arms`)
+    and turns by at most Σ_a |δ_a| / 2 from the nearer sample.
     """
+    x_goal = np.asarray(task.goal, dtype=float)
     if len(goal_points) < 2:
-        return float(np.linalg.norm(robot.forward_kinematics(goal_points) - x_goal, axis=-1).max())
-    t = np.linspace(0.0, 1.0, samples + 1)
+        errors = task_errors(robot, x_goal, goal_points)
+        return float(errors[:, 0].max()), float(errors[:, 1].max())
     a, b = goal_points[:-1], goal_points[1:]
+    turn = np.abs(b - a).sum(axis=1).max()
+    oriented = task.kind in ('axis', 'pose')
+    if oriented:
+        samples = max(samples, int(np.ceil(2.0 * turn / task.orientation_tolerance)))
+    t = np.linspace(0.0, 1.0, samples + 1)
     chords = a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]
-    errors = np.linalg.norm(robot.forward_kinematics(chords) - x_goal, axis=-1)
+    errors = task_errors(robot, x_goal, chords)  # (K-1, samples+1, 2)
     step = np.abs(b - a) / samples  # (K-1, n)
     tip = robot.tip_lever_arms()
     pair_arm = tip[np.maximum.outer(np.arange(len(tip)), np.arange(len(tip)))]
     curvature = np.einsum('ka,ab,kb->k', step, pair_arm, step) / 8.0
-    return float(np.max(errors.max(axis=1) + curvature))
+    position = float(np.max(errors[..., 0].max(axis=1) + curvature))
+    if not oriented:
+        return position, 0.0
+    return position, float(np.max(errors[..., 1].max(axis=1) + 0.5 * step.sum(axis=1)))
 
 
 def structure_problem(surface: FailureSurface) -> str:
@@ -125,42 +148,45 @@ def structure_problem(surface: FailureSurface) -> str:
     steps = np.diff(surface.nominal_path, axis=0)
     if not np.all(np.all(steps >= 0, axis=0) | np.all(steps <= 0, axis=0)):
         return 'the nominal path is not monotonic in every joint'
-    for i, k in enumerate(surface.hit_paths):
+    for i, k in zip(surface.tolerated, surface.hit_paths, strict=True):
         if not np.all(paths[k, :, i] == theta_s[i]):
             return f'the path to the H_{i + 1} hit leaves the failure plane'
     return ''
 
 
-def certify_surface(surface: FailureSurface, checker: CollisionChecker, x_goal: np.ndarray,
-                    goal_tolerance: float, options: VerificationOptions | None = None,
-                    ) -> Verdict:
-    """Parts 1, 2 and the structure of part 3 (see the module docstring) for x_g (m,) [m]."""
+def certify_surface(surface: FailureSurface, checker: CollisionChecker, task: Task,
+                    options: VerificationOptions | None = None) -> Verdict:
+    """Parts 1, 2 and the structure of part 3 (see the module docstring) for the task's goal."""
     options = options or VerificationOptions()
     problem = structure_problem(surface)
     if problem:
         return Verdict(False, problem)
-    error = goal_row_error(checker.robot, x_goal, surface.goal_points, options.chord_samples)
-    if not error <= goal_tolerance:  # NaN fails too
-        return Verdict(False, f'the goal row strays {error:.4f} m from x_g '
-                       f'(tolerance {goal_tolerance} m)', max_goal_error=error)
+    position, orientation = goal_row_error(checker.robot, task, surface.goal_points,
+                                           options.chord_samples)
+    if not (position <= task.goal_tolerance and orientation <= task.orientation_tolerance):
+        return Verdict(False, f'the goal row strays {position:.4f} m, {orientation:.4f} rad '
+                       f'from the goal (tolerances {task.goal_tolerance} m, '
+                       f'{task.orientation_tolerance} rad)', max_goal_error=position,
+                       max_orientation_error=orientation)
     corners = surface.vertices[surface.triangles]
     ok, failed, smallest, samples = certify_simplices(checker, corners, options.margin,
                                                       options.max_depth)
     if not ok:
         path, waypoint = np.unravel_index(surface.triangles[failed, 0], surface.paths.shape[:2])
         return Verdict(False, f'S_F is not collision-free near path {path}, waypoint '
-                       f'{waypoint}', min_clearance=smallest, max_goal_error=error,
-                       clearance_samples=samples)
-    return Verdict(True, '', smallest, max_goal_error=error, clearance_samples=samples)
+                       f'{waypoint}', min_clearance=smallest, max_goal_error=position,
+                       max_orientation_error=orientation, clearance_samples=samples)
+    return Verdict(True, '', smallest, max_goal_error=position,
+                   max_orientation_error=orientation, clearance_samples=samples)
 
 
-def check_recoveries(surface: FailureSurface, checker: CollisionChecker, x_goal: np.ndarray,
-                     goal_tolerance: float, certified: Verdict,
-                     options: VerificationOptions | None = None) -> Verdict:
-    """Part 3's check of the implementation: `recover` at sampled moments, for every joint.
+def check_recoveries(surface: FailureSurface, checker: CollisionChecker, task: Task,
+                     certified: Verdict, options: VerificationOptions | None = None,
+                     ) -> Verdict:
+    """Part 3's check of the implementation: `recover` at sampled moments, every tolerated joint.
 
     Each recovery path must exist, be certified collision-free segment by segment and
-    end within the goal tolerance. `certified` is the surface's verdict from
+    end within the goal tolerances. `certified` is the surface's verdict from
     `certify_surface`; the returned verdict extends it.
     """
     options = options or VerificationOptions()
@@ -168,18 +194,19 @@ def check_recoveries(surface: FailureSurface, checker: CollisionChecker, x_goal:
     recovery_clearance = np.inf
     for progress in np.linspace(0.0, 1.0, options.recovery_moments):
         theta = point_at_fraction(surface.nominal_path, progress)
-        for joint in range(len(theta)):
+        for joint in surface.tolerated:
             rescue = recover(surface, theta, joint)
             where = f'check failed at joint {joint + 1}, progress {progress:.2f}'
             if rescue is None:
                 return replace(certified, ok=False, reason=f'{where}: no recovery path')
-            arrival = np.linalg.norm(checker.robot.forward_kinematics(rescue.path[-1]) - x_goal)
+            arrival = task_errors(checker.robot, task.goal, rescue.path[-1])
             segments = np.stack([rescue.path[:-1], rescue.path[1:]], axis=1)
             clear, _, lowest, count = certify_simplices(checker, segments, options.margin,
                                                         options.max_depth)
             samples += count
-            if not clear or not arrival <= goal_tolerance:
-                why = 'collides' if not clear else f'ends {arrival:.4f} m from x_g'
+            if not clear or not task.reached(arrival):
+                why = 'collides' if not clear else \
+                    f'ends {arrival[0]:.4f} m, {arrival[1]:.4f} rad from the goal'
                 return replace(certified, ok=False, clearance_samples=samples,
                                reason=f'{where}: the recovery path {why}')
             recovery_clearance = min(recovery_clearance, lowest)
@@ -187,14 +214,13 @@ def check_recoveries(surface: FailureSurface, checker: CollisionChecker, x_goal:
                    clearance_samples=samples)
 
 
-def verify_surface(surface: FailureSurface, checker: CollisionChecker, x_goal: np.ndarray,
-                   goal_tolerance: float, options: VerificationOptions | None = None,
-                   ) -> Verdict:
-    """Run the whole self-check of S_F for x_g (m,) [m]: certification, then recoveries."""
-    certified = certify_surface(surface, checker, x_goal, goal_tolerance, options)
+def verify_surface(surface: FailureSurface, checker: CollisionChecker, task: Task,
+                   options: VerificationOptions | None = None) -> Verdict:
+    """Run the whole self-check of S_F for the task: certification, then recoveries."""
+    certified = certify_surface(surface, checker, task, options)
     if not certified.ok:
         return certified
-    return check_recoveries(surface, checker, x_goal, goal_tolerance, certified, options)
+    return check_recoveries(surface, checker, task, certified, options)
 
 
 def _pieces(corners: np.ndarray) -> int:

@@ -1,0 +1,23 @@
+"""The planner's options: resolutions [rad], budgets and the self-check's settings."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .manifolds import ManifoldOptions
+from .verification import VerificationOptions
+
+
+@dataclass(frozen=True)
+class PlannerOptions:
+    """Resolutions [rad] and budgets of the planner."""
+
+    manifold: ManifoldOptions = field(default_factory=ManifoldOptions)
+    verification: VerificationOptions = field(default_factory=VerificationOptions)
+    column_spacing: float = 0.06      # between the goal points of a web
+    waypoint_spacing: float = 0.04    # between the waypoints of a web path, per joint
+    coarse_waypoints: int = 8         # waypoints of each path of the ranking fans
+    max_verifications: int = 40       # surfaces verified at most
+    candidate_refinement: int = 4     # start candidates per manifold step on the retry
+    curves: int = 6                   # redundancy >= 2: curves on the manifolds tried at most
+    curve_samples: int = 64           # redundancy >= 2: inverse-kinematics samples per task point

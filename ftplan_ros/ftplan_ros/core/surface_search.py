@@ -1,0 +1,336 @@
+"""The paper's Steps 1-6 and the self-check, for one degree of redundancy (r = n - m = 1).
+
+Candidates θ_s are the obstacle-free points of M_s, one per continuation step (the
+manifold's `step_max` sets their spacing). Those passing the necessary condition (eq. 6)
+for every tolerated joint on one free arc of M_g get a failure surface over the smallest
+windows of that arc that hold a hit of every tolerated joint. Every such surface is
+built coarsely and scored by the smallest clearance at its vertices; the best-scored is
+built at full resolution and verified, then the next, until one passes. That criterion
+(recorded in the result's stats) prefers the start whose whole recovery region stays
+farthest from obstacles over the first start found.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .angles import wrap_configuration
+from .collision import CollisionChecker
+from .errors import InputError
+from .failure_planes import (
+    FailurePlaneHit,
+    chord_crossings,
+    failure_plane_hits,
+    goal_free_arcs,
+    necessary_condition,
+)
+from .failure_surface import (
+    FailureSurface,
+    build_failure_surface,
+    choose_hits,
+    lift_goal_arc,
+    smallest_windows,
+)
+from .manifolds import (
+    ManifoldCache,
+    SelfMotionManifold,
+    mark_obstacle_free,
+    project_many,
+    project_to_preimage,
+)
+from .options import PlannerOptions
+from .result import PlanResult
+from .scene import Scene
+from .verification import verify_surface
+
+log = logging.getLogger(__name__)
+
+CRITERION = 'largest minimum clearance at the vertices of the failure surface'
+# [m] the ranking's clearances are cheap lower bounds (collision.py), tight below this
+_RANKING_CLEARANCE = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class _Search:
+    """The outcome of Steps 3-6 and the self-check over one set of start candidates."""
+
+    surface: FailureSurface | None
+    reason: str
+    stats: dict = field(default_factory=dict)
+    theta_S: np.ndarray | None = None
+    proposed: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class _Proposal:
+    """A (θ_s, arc, window) whose coarse web is collision-free at every vertex."""
+
+    score: float          # smallest vertex clearance [m] of the coarse web
+    candidate: int
+    arc: int
+    window: tuple[float, float]
+
+
+class SurfaceSearch:
+    """Plan a scene whose robot has one degree of redundancy (see the module docstring).
+
+    `scene.tolerated_joints` are the joints whose locks the surface is built for; the
+    others may block the way to the goal when they lock.
+    """
+
+    def __init__(self, scene: Scene, options: PlannerOptions, rng: np.random.Generator,
+                 report: Callable[[str], None], cache: ManifoldCache):
+        self.scene = scene
+        self.robot = scene.robot
+        self.task = scene.task
+        self.options = options
+        self.rng = rng
+        self.report = report
+        self.cache = cache
+        self.joints = scene.tolerated_joints
+        self.margin = options.verification.margin
+        self.checker = CollisionChecker(self.robot, scene.obstacles)
+        self.x_s = np.asarray(self.task.start, dtype=float)
+        self.x_g = np.asarray(self.task.goal, dtype=float)
+
+    def run(self, start_configuration: np.ndarray | None = None) -> PlanResult:
+        """Run Steps 1-6 and the self-check; with a start configuration, only that θ_s."""
+        M_s, M_g = self.manifolds()
+        arcs = goal_free_arcs(M_g, self.margin)
+        stats: dict = {'criterion': CRITERION, 'start_branches': len(M_s),
+                       'goal_branches': len(M_g), 'goal_free_arcs': len(arcs)}
+        arc_points = [M_g[arc.branch].arc_points(arc.first, arc.count) for arc in arcs]
+        arc_laps = [arc.lap for arc in arcs]
+        # Candidates one step apart along M_s and, when that finds nothing, between them
+        # (a narrow band of good starts).
+        refinements = [None] if start_configuration is not None else \
+            [1, self.options.candidate_refinement]
+        for subdivisions in refinements:
+            if subdivisions is None:
+                candidates = self._given_start(start_configuration)
+            else:
+                candidates = self._start_candidates(M_s, subdivisions)
+            search = self._search(candidates, arc_points, arc_laps)
+            stats.update(search.stats, start_candidates=len(candidates),
+                         candidate_subdivisions=subdivisions or 1)
+            if search.surface is not None or not arcs:
+                break
+            self.report(f'no plan from {len(candidates)} starts; trying starts between them')
+        stats['collision_checks'] = self.checker.checks
+        stats['tolerated_joints'] = [self.robot.joint_names[i] for i in self.joints]
+        return PlanResult(search.surface is not None, self.robot.joint_names, search.reason,
+                          search.surface, stats, M_s, M_g, search.theta_S, search.proposed,
+                          self.robot.periodic)
+
+    def manifolds(self) -> tuple[tuple[SelfMotionManifold, ...], tuple[SelfMotionManifold, ...]]:
+        """Trace M_s and M_g with the clearance of their points (Steps 1-2)."""
+        self.report('tracing self-motion manifolds')
+        manifolds = []
+        for name, x in (('task.start', self.x_s), ('task.goal', self.x_g)):
+            branches = self.cache.trace(self.robot, x, self.rng, self.options.manifold)
+            if not branches:
+                raise InputError(name, 'no configuration reaches it (inverse kinematics '
+                                 'failed)')
+            manifolds.append(tuple(mark_obstacle_free(b, self.checker, self.margin)
+                                   for b in branches))
+        return manifolds[0], manifolds[1]
+
+    # Steps 3-6 ----------------------------------------------------------------------
+
+    def _search(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                arc_laps: list[int]) -> _Search:
+        """Run Steps 3-6 and the self-check for candidates (c, n) [rad] on the free arcs."""
+        if len(candidates) == 0:
+            return _Search(None, 'every start configuration collides (M_s^F is empty)')
+        if not arc_points:
+            return _Search(None, 'every goal configuration collides (M_g^F is empty)')
+
+        # Step 3: the necessary condition, on M_g^F as a whole (the paper's Θ_s) and per arc.
+        per_arc = np.stack([necessary_condition(self.robot, candidates, points, self.joints)
+                            for points in arc_points])  # (arcs, C, J)
+        theta_S = candidates[per_arc.any(axis=0).all(axis=1)]
+        single_arc = per_arc.all(axis=2)  # (arcs, C)
+        stats: dict = {'theta_S': len(theta_S)}
+        if len(theta_S) == 0:
+            blocked = [j for k, j in enumerate(self.joints) if not per_arc[:, :, k].any()]
+            stats['blocked_joints'] = [self.robot.joint_names[j] for j in blocked]
+            return _Search(None, self._necessary_condition_reason(blocked, arc_points),
+                           stats, theta_S)
+        if not single_arc.any():
+            return _Search(None, 'the failure planes of every θ_s meet M_g^F only on '
+                           'different obstacle-free arcs: no failure surface can join them',
+                           stats, theta_S)
+
+        # Steps 4-6: failure surfaces, ranked by the clearance at their vertices.
+        self.report(f'{len(theta_S)} start configurations pass the necessary condition; '
+                    'building failure surfaces')
+        proposals = self._rank_proposals(candidates, arc_points, arc_laps, single_arc)
+        proposed = candidates[sorted({p.candidate for p in proposals})]
+        stats['surfaces_proposed'] = len(proposals)
+        if not proposals:
+            return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
+                           'at one of its vertices', stats, theta_S, proposed)
+        return self._verify_best(candidates, arc_points, proposals, stats, theta_S, proposed)
+
+    def _verify_best(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                     proposals: list[_Proposal], stats: dict, theta_S: np.ndarray,
+                     proposed: np.ndarray) -> _Search:
+        """Self-check, best-ranked first: the first surface that passes wins."""
+        last_reason = 'every fine web hits an obstacle at a vertex'
+        tried = 0
+        for proposal in proposals[:self.options.max_verifications]:
+            surface = self._fine_surface(candidates[proposal.candidate],
+                                         arc_points[proposal.arc], proposal.window)
+            if surface is None:
+                continue
+            tried += 1
+            verdict = verify_surface(surface, self.checker, self.task,
+                                     self.options.verification)
+            if verdict.ok:
+                self.report(f'verified the failure surface of start {tried} in the ranking')
+                stats.update(surfaces_tried=tried, criterion_value_m=proposal.score,
+                             min_clearance_m=verdict.min_clearance,
+                             recovery_min_clearance_m=verdict.recovery_min_clearance,
+                             goal_error_bound_m=verdict.max_goal_error,
+                             orientation_error_bound_rad=verdict.max_orientation_error,
+                             clearance_samples=verdict.clearance_samples)
+                return _Search(surface, '', stats, theta_S, proposed)
+            last_reason = verdict.reason
+            log.debug('surface rejected: %s', verdict.reason)
+        stats['surfaces_tried'] = tried
+        return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
+                       f'{last_reason}', stats, theta_S, proposed)
+
+    def _necessary_condition_reason(self, blocked: list[int],
+                                    arc_points: list[np.ndarray]) -> str:
+        """Say which joints' failure planes miss M_g^F, and why when a joint never moves."""
+        names = self.robot.joint_names
+        reason = ('no candidate θ_s passes the necessary condition: the failure plane of '
+                  f'{", ".join(names[j] for j in blocked) or "some joint"} misses M_g^F for '
+                  'every start')
+        goal = np.vstack(arc_points)
+        for j in blocked:
+            spread = np.ptp(goal[:, j])
+            if spread < 1e-6:
+                reason += (f'. {names[j]} keeps the same angle, {goal[0, j]:.4f} rad, along the '
+                           'whole goal self-motion (a spherical shoulder and wrist fix the '
+                           'elbow for a pose): locked anywhere else it can never reach the goal')
+        return reason
+
+    def _given_start(self, theta: np.ndarray) -> np.ndarray:
+        """Move the given start onto M_s: a (1, n) candidate, or (0, n) if it collides."""
+        robot = self.robot
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (robot.n_joints,) or not np.all(np.isfinite(theta)):
+            raise InputError('start_configuration', f'must be {robot.n_joints} finite angles')
+        on_manifold = project_to_preimage(robot, self.x_s, theta)
+        if on_manifold is None or np.max(np.abs(on_manifold - theta)) > 0.1:
+            raise InputError('start_configuration', 'does not put the tool at task.start')
+        on_manifold = wrap_configuration(on_manifold, robot.periodic)[None, :]
+        if self.checker.min_clearance(on_manifold, self.margin)[0] <= self.margin:
+            return np.empty((0, robot.n_joints))
+        return on_manifold
+
+    def _start_candidates(self, branches: tuple[SelfMotionManifold, ...],
+                          subdivisions: int) -> np.ndarray:
+        """Obstacle-free configurations (c, n) [rad] of M_s, wrapped, `subdivisions` per step.
+
+        With one subdivision these are the traced points; with more, points between them
+        are interpolated and moved back onto M_s by Newton.
+        """
+        points = [np.empty((0, self.robot.n_joints))]
+        for branch in branches:
+            if subdivisions == 1:
+                points.append(branch.points[branch.free(self.margin)])
+                continue
+            ends = np.vstack([branch.points, branch.points[:1] + branch.period]) \
+                if branch.closed else branch.points
+            t = np.arange(subdivisions)[None, :, None] / subdivisions
+            between = (ends[:-1, None] + t * (ends[1:, None] - ends[:-1, None])).reshape(
+                -1, ends.shape[1])
+            solved, converged = project_many(self.robot, self.x_s, between)
+            solved = solved[converged & _within_limits(self.robot, solved)]
+            clear = self.checker.min_clearance(solved, self.margin, refine=False)
+            points.append(solved[clear > self.margin])
+        return wrap_configuration(np.vstack(points), self.robot.periodic)
+
+    def _rank_proposals(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                        arc_laps: list[int], single_arc: np.ndarray) -> list[_Proposal]:
+        """Score a coarse failure surface for each (θ_s, arc) passing eq. 6; best first.
+
+        A coarse surface is the fan of straight paths from θ_s to its chord crossings (one
+        per tolerated joint) and to a few points spread over the window, all scored in one
+        clearance batch: a cheap screen, never a guarantee.
+        """
+        proposals, fans = [], []
+        for a, points in enumerate(arc_points):
+            members = np.flatnonzero(single_arc[a])
+            hits: list[list[list[FailurePlaneHit]]] = [[[] for _ in self.joints]
+                                                       for _ in members]
+            for k, i in enumerate(self.joints):
+                which, positions, thetas = chord_crossings(self.robot, candidates[members],
+                                                           points, i)
+                for slot, position, theta in zip(which, positions, thetas, strict=True):
+                    hits[slot][k].append(FailurePlaneHit(i, theta, float(position)))
+            for slot, c in enumerate(members):
+                for window in (w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]):
+                    fans.append(_coarse_fan(candidates[c], points, choose_hits(hits[slot], window),
+                                            window, self.robot.periodic,
+                                            self.options.coarse_waypoints))
+                    proposals.append((int(c), a, window))
+        if not fans:
+            return []
+        clearance = self.checker.min_clearance(np.vstack(fans), self.margin + _RANKING_CLEARANCE,
+                                               refine=False).reshape(len(fans), -1).min(axis=1)
+        scored = [_Proposal(float(score), *proposal)
+                  for score, proposal in zip(clearance, proposals, strict=True)
+                  if score > self.margin]
+        return sorted(scored, key=lambda p: -p.score)
+
+    def _fine_surface(self, theta_s: np.ndarray, arc_points: np.ndarray,
+                      window: tuple[float, float]) -> FailureSurface | None:
+        """Build the web to verify: exact hits, full resolution, the clearest nominal path."""
+        hits = failure_plane_hits(self.robot, self.x_g, theta_s, arc_points, self.joints)
+        inside = [[h for h in joint_hits if window[0] - 1 <= h.position <= window[1] + 1]
+                  for joint_hits in hits]
+        if not all(inside):
+            return None
+        window = (min(h.position for hs in inside for h in hs),
+                  max(h.position for hs in inside for h in hs))
+        chosen = choose_hits(inside, window)
+        lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, chosen, self.robot.periodic)
+        surface = build_failure_surface(theta_s, lifted, lifted_hits, window,
+                                        self.options.column_spacing,
+                                        self.options.waypoint_spacing)
+        clearance = self.checker.min_clearance(surface.vertices, self.margin).reshape(
+            surface.paths.shape[:2])
+        if clearance.min() <= self.margin:
+            return None
+        # Nominal path: the clearest, and among equally clear ones the shortest.
+        lengths = np.linalg.norm(surface.goal_points - theta_s, axis=1)
+        nominal = int(np.lexsort((lengths, -clearance.min(axis=1)))[0])
+        return replace(surface, nominal=nominal)
+
+
+def _within_limits(robot, thetas: np.ndarray) -> np.ndarray:
+    """(N,) bool: configurations (N, n) inside the joint limits (periodic joints always)."""
+    limits = robot.limits
+    inside = (thetas >= limits[:, 0]) & (thetas <= limits[:, 1])
+    return np.all(inside | robot.periodic, axis=1)
+
+
+def _coarse_fan(theta_s: np.ndarray, arc_points: np.ndarray, hits: list[FailurePlaneHit],
+                window: tuple[float, float], periodic: np.ndarray, waypoints: int) -> np.ndarray:
+    """Points (m, n) [rad] of straight paths from θ_s to its hits and across the window."""
+    lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, hits, periodic)
+    spread = np.linspace(window[0], window[1], 5)
+    k = np.minimum(spread.astype(int), len(arc_points) - 2)
+    t = (spread - k)[:, None]
+    goals = np.vstack([[h.theta for h in lifted_hits],
+                       lifted[k] + t * (lifted[k + 1] - lifted[k])])
+    steps = np.arange(1, waypoints + 1)[:, None, None] / waypoints
+    return (theta_s + steps * (goals - theta_s)).reshape(-1, len(theta_s))
