@@ -40,8 +40,10 @@ $(VENV_STAMP): requirements.txt constraints.txt $(SETUP_FILES)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --disable-pip-version-check -c constraints.txt -r requirements.txt
 	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps -e ftplan_msgs_py -e ftplan_ros
-	@echo "compiling the continuation kernel (numba, once: about 10 s)"
-	$(BIN)/python -c "from ftplan_ros.core import PlanarChain, load_kernels; load_kernels(PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c')))"
+	@echo "compiling the kinematics, continuation and distance kernels (numba, once: about a minute)"
+	$(BIN)/python -c "from ftplan_ros.core import PlanarChain, load_kernels, parse_scene; \
+		load_kernels(PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))); \
+		load_kernels(parse_scene({'robot': 'panda.yaml'}, directory='config/robots').robot)"
 	touch $@
 
 $(ROS_LAYOUT): $(VENV_STAMP) $(LAYOUT_FILES)

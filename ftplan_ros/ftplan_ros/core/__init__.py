@@ -10,26 +10,29 @@ Nothing below this package imports rclpy. Typical use:
 from .collision import CollisionChecker
 from .errors import InputError
 from .failure_surface import FailureSurface
-from .manifolds import (
-    ManifoldCache,
-    ManifoldOptions,
-    SelfMotionManifold,
-    load_kernels,
-    self_motion_path,
-)
+from .manifolds import ManifoldCache, ManifoldOptions, SelfMotionManifold, self_motion_path
 from .options import PlannerOptions
 from .planner import check_plannable, plan
 from .recovery import RecoveryPath, locate_on_nominal_path, recover
 from .result import PlanResult
 from .robot import PlanarChain, Robot, task_errors
-from .scene import Obstacle, Scene, Task, load_scene, parse_scene, scene_to_dict
+from .scene import (
+    Obstacle,
+    Scene,
+    Task,
+    load_scene,
+    parse_scene,
+    robot_from_urdf,
+    scene_to_dict,
+)
 from .spatial import SpatialArm
 from .verification import VerificationOptions
+from .warmup import load_kernels
 
 __all__ = [
     'CollisionChecker', 'FailureSurface', 'InputError', 'ManifoldCache', 'ManifoldOptions',
     'Obstacle', 'PlanResult', 'PlanarChain', 'PlannerOptions', 'RecoveryPath', 'Robot',
     'Scene', 'SelfMotionManifold', 'SpatialArm', 'Task', 'VerificationOptions',
     'check_plannable', 'load_kernels', 'load_scene', 'locate_on_nominal_path', 'parse_scene',
-    'plan', 'recover', 'scene_to_dict', 'self_motion_path', 'task_errors',
+    'plan', 'recover', 'robot_from_urdf', 'scene_to_dict', 'self_motion_path', 'task_errors',
 ]

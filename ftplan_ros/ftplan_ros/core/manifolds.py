@@ -156,19 +156,6 @@ class ManifoldCache:
         return branches
 
 
-def load_kernels(robot: Robot) -> None:
-    """Run the compiled continuation once, so that the first plan does not wait for it.
-
-    numba loads (or, on a new machine, compiles) the kernel at its first call in a
-    process: about 0.3 s from its cache. Robots it cannot trace for are left to `plan`,
-    which says why.
-    """
-    if robot.n_joints - robot.task_dim != 1:
-        return
-    x = robot.forward_kinematics(np.full(robot.n_joints, 0.5))
-    trace_self_motion_manifolds(robot, x, np.random.default_rng(0), ManifoldOptions(seeds=1))
-
-
 def self_motion_path(robot: Robot, x: np.ndarray, theta_from: np.ndarray,
                      theta_to: np.ndarray, options: ManifoldOptions | None = None,
                      ) -> np.ndarray | None:

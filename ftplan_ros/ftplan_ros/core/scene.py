@@ -119,8 +119,8 @@ class Scene:
         return tuple(names.index(name) for name in self.tolerate)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene YAML file."""
+def load_scene(path: str | Path, robot: Robot | None = None) -> Scene:
+    """Read and validate a scene YAML file (`robot`: the robot when the file has none)."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -135,26 +135,30 @@ def load_scene(path: str | Path) -> Scene:
         where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''
         problem = getattr(error, 'problem', None) or 'malformed YAML'
         raise InputError(str(path), f'malformed YAML{where}: {problem}') from None
-    return parse_scene(data, name=path.stem, directory=path.parent)
+    return parse_scene(data, name=path.stem, directory=path.parent, robot=robot)
 
 
-def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None) -> Scene:
+def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None,
+                robot: Robot | None = None) -> Scene:
     """Validate a scene given as plain data (what `yaml.safe_load` returns).
 
     `robot` is a mapping, or the path of a robot YAML file (holding one `robot` mapping)
     relative to `directory`, the scene file's folder; a URDF's `file` is relative to the
-    file that names it.
+    file that names it. A scene without one takes the `robot` argument (the nodes build
+    it from /robot_description).
     """
     data = _mapping(data, 'scene')
-    _check_keys(data, 'scene', required=('robot',),
-                optional=('obstacles', 'task', 'frame_id', 'tolerate'))
+    _check_keys(data, 'scene', required=(),
+                optional=('robot', 'obstacles', 'task', 'frame_id', 'tolerate'))
     directory = Path(directory or '.')
-    robot_data = data['robot']
-    if isinstance(robot_data, str):
-        robot_data, directory_of_robot = _robot_file(directory / robot_data)
-    else:
-        directory_of_robot = directory
-    robot = parse_robot(robot_data, directory_of_robot)
+    if 'robot' in data:
+        robot_data = data['robot']
+        if isinstance(robot_data, str):
+            robot_data, directory = _robot_file(directory / robot_data)
+        robot = parse_robot(robot_data, directory)
+    elif robot is None:
+        raise InputError('robot', 'is missing: give the robot in the scene (the nodes can '
+                         'take it from /robot_description instead)')
     frame_id = data.get('frame_id', 'base_link')
     if not isinstance(frame_id, str) or not frame_id:
         raise InputError('frame_id', 'must be a non-empty string')
@@ -244,13 +248,10 @@ def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
         raise InputError('robot.file', f'cannot read {path.name} ({error.strerror})') from None
     except UnicodeDecodeError:
         raise InputError('robot.file', f'{path.name} is not UTF-8 text') from None
-    for key in ('base_link', 'tip_link'):
-        if key in data and (not isinstance(data[key], str) or not data[key]):
-            raise InputError(f'robot.{key}', 'must be a link name')
-    offset = _vector(data.get('tip_offset', [0.0, 0.0, 0.0]), 'robot.tip_offset', length=3)
-    model = chain_from_urdf(xml, data['tip_link'], data.get('base_link'), offset,
-                            mesh_dirs=[str(path.parent), str(path.parent.parent)])
-    return with_disabled_collisions(model, data.get('disabled_collisions'))
+    return robot_from_urdf(xml, data['tip_link'], data.get('base_link'),
+                           data.get('tip_offset', [0.0, 0.0, 0.0]),
+                           data.get('disabled_collisions'),
+                           mesh_dirs=[str(path.parent), str(path.parent.parent)]).model
 
 
 def _dh_chain(data: Mapping) -> ChainModel:
@@ -270,6 +271,23 @@ def _dh_chain(data: Mapping) -> ChainModel:
     model = chain_from_dh(rows, _joint_names(data.get('joint_names'), len(rows)),
                           _link_radius(data), offset)
     return with_disabled_collisions(model, data.get('disabled_collisions'))
+
+
+def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
+                    tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
+                    disabled_collisions: Any = None, mesh_dirs: Sequence[str] = (),
+                    task_kind: str = 'pose') -> SpatialArm:
+    """Build the arm of a URDF given as text (e.g. /robot_description) for a kind of task.
+
+    The arguments are those of a scene's `robot: {type: urdf, ...}` (InputError names
+    them the same way).
+    """
+    for key, value in (('tip_link', tip_link), ('base_link', base_link)):
+        if value is not None and (not isinstance(value, str) or not value):
+            raise InputError(f'robot.{key}', 'must be a link name')
+    offset = _vector(list(tip_offset), 'robot.tip_offset', length=3)
+    model = chain_from_urdf(xml, tip_link, base_link, offset, mesh_dirs=mesh_dirs)
+    return SpatialArm(with_disabled_collisions(model, disabled_collisions), task_kind)
 
 
 def with_disabled_collisions(model: ChainModel, data: Any) -> ChainModel:

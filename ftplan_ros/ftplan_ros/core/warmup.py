@@ -1,0 +1,33 @@
+"""Load the compiled kernels before the first plan, so that it does not wait for them.
+
+numba loads (or, on a new machine, compiles) each kernel at its first call in a
+process: together about a second from its cache, a minute to compile. The Makefile
+calls `load_kernels` at set-up, so the cache is there before the first plan.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .collision import CollisionChecker
+from .curves import FrozenJoints
+from .manifolds import ManifoldOptions, trace_self_motion_manifolds
+from .robot import Robot, task_errors, task_residuals
+from .scene import Obstacle
+
+
+def load_kernels(robot: Robot) -> None:
+    """Run every compiled kernel the robot's plans use once: tracing, task maps, distances."""
+    theta = np.clip(np.full(robot.n_joints, 0.5), robot.limits[:, 0], robot.limits[:, 1])
+    x = robot.forward_kinematics(theta)
+    task_residuals(robot, x, theta)
+    task_errors(robot, x, theta)
+    redundancy = robot.n_joints - robot.task_dim
+    if redundancy >= 1:
+        traced = robot if redundancy == 1 else FrozenJoints(
+            robot, tuple(range(redundancy - 1)), tuple(theta[:redundancy - 1]))
+        trace_self_motion_manifolds(traced, traced.forward_kinematics(theta[redundancy - 1:]),
+                                    np.random.default_rng(0), ManifoldOptions(seeds=1))
+    near = tuple(float(v) for v in robot.skeleton(theta)[-1])  # the tool: within reach
+    obstacles = [Obstacle('sphere', near, radius=0.1), Obstacle('box', near, size=(0.1,) * 3)]
+    CollisionChecker(robot, obstacles).clearance(np.stack([theta, theta]), needed=np.inf)
