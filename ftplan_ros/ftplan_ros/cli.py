@@ -1,9 +1,10 @@
 """The `ftplan` command: plan, drill, draw, benchmark and study failure-tolerant motions.
 
     ftplan plan SCENE.yaml [--json OUT.json] [--png FIG.png] [--seed S] [--margin M]
-    ftplan drill SCENE.yaml [--trials N] [--seed S] [--png MOTION.png]
+    ftplan drill SCENE.yaml [--trials N] [--seed S] [--png MOTION.png] [--json OUT.json]
     ftplan figure SCENE.yaml [--out DIR]
-    ftplan bench [--scenes N] [--seed S] [--cells C] [--json OUT.json]
+    ftplan bench [--robot planar3r|panda|iiwa14] [--scenes N] [--seed S] [--cells C]
+                 [--json OUT.json]
     ftplan study SPEC.yaml --out DIR [--scheduler ADDRESS] [--workers N]
 
 Exit codes: 0 done (for `plan`: a failure-tolerant plan exists), 1 no failure-tolerant
@@ -29,7 +30,8 @@ from .core import (
     load_scene,
     plan,
 )
-from .core.drill import drilled_motion, run_drill, summarize_drill
+from .core.drill import drill_json, drilled_motion, run_drill, summarize_drill
+from .core.task_space import format_point
 
 log = logging.getLogger('ftplan')
 
@@ -116,6 +118,7 @@ def _parser() -> argparse.ArgumentParser:
     drill.add_argument('scene', type=Path)
     drill.add_argument('--trials', type=int, default=1000, help='failures to try (1000)')
     drill.add_argument('--png', type=Path, help='draw one drilled motion here')
+    drill.add_argument('--json', type=Path, help='write every trial (its whole motion) here')
     _planner_arguments(drill)
     drill.set_defaults(run=_drill_command)
 
@@ -125,10 +128,16 @@ def _parser() -> argparse.ArgumentParser:
     _planner_arguments(figure)
     figure.set_defaults(run=_figure_command)
 
-    bench = commands.add_parser('bench', help='time the planner against the exhaustive grid')
-    bench.add_argument('--scenes', type=int, default=30, help='random scenes (30)')
+    bench = commands.add_parser('bench', help='time the planner against a baseline in one run')
+    bench.add_argument('--robot', default='planar3r', choices=('planar3r', 'panda', 'iiwa14'),
+                       help='planar3r (the paper\'s arm, against the exhaustive grid) or a '
+                       '7-joint arm (pose tasks among 10 obstacles, against sampled locks); '
+                       'planar3r')
+    bench.add_argument('--scenes', type=int, default=30,
+                       help='random scenes per group (30; a 7-joint arm: tasks, 30)')
     bench.add_argument('--seed', type=int, default=0)
-    bench.add_argument('--cells', type=int, default=90, help='grid cells per joint (90: 4 deg)')
+    bench.add_argument('--cells', type=int, default=90,
+                       help='planar3r: grid cells per joint (90: 4 deg)')
     bench.add_argument('--json', type=Path, help='write every measurement here')
     bench.set_defaults(run=_bench_command)
 
@@ -197,6 +206,11 @@ def _drill_command(args: argparse.Namespace) -> int:
     print(summarize_drill(trials, scene.robot.joint_names))
     failed = [t for t in trials if not t.ok]
     print(f'{len(trials) - len(failed)}/{len(trials)} trials reached the goal without collision')
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(drill_json(trials, scene.robot.joint_names),
+                                        allow_nan=False))
+        print(f'wrote {args.json}')
     if args.png:
         from .figures import motion_figure, save_figure
         drawn = _trial_to_draw(result, trials)
@@ -238,10 +252,13 @@ def _figure_command(args: argparse.Namespace) -> int:
 
 
 def _bench_command(args: argparse.Namespace) -> int:
-    from .bench import run_benchmark
     _at_least(args.scenes, 1, '--scenes')
     _at_least(args.cells, 2, '--cells')
     _at_least(args.seed, 0, '--seed')
+    if args.robot != 'planar3r':
+        from .spatial_bench import run_spatial_benchmark
+        return run_spatial_benchmark(args.robot, args.scenes, args.seed, args.json, Progress())
+    from .bench import run_benchmark
     return run_benchmark(args.scenes, args.seed, args.cells, args.json, Progress())
 
 
@@ -253,22 +270,34 @@ def _study_command(args: argparse.Namespace) -> int:
 def _describe(scene, result) -> str:
     """Describe the outcome in a few lines: θ_s and hits in degrees, time and checks."""
     stats = result.stats
-    lines = [f'scene {scene.name}: task {list(scene.task.start)} -> {list(scene.task.goal)} m, '
-             f'{len(scene.obstacles)} obstacles']
+    task, names = scene.task, scene.robot.joint_names
+    lines = [f'scene {scene.name}: {task.kind} task {format_point(task.kind, task.start)} -> '
+             f'{format_point(task.kind, task.goal)} m, {len(scene.obstacles)} obstacles']
     if not result.feasible:
         lines.append(f'no failure-tolerant plan: {result.reason}')
     else:
         degrees = np.degrees
-        lines.append(f'feasible: theta_s = {_deg(degrees(result.theta_s))} deg')
-        for i, hit in enumerate(result.failure_plane_hits):
-            lines.append(f'  H{i + 1} hit on M_g^F: {_deg(degrees(hit))} deg')
+        lines.append(f'feasible: theta_s = {_deg(degrees(result.theta_s))} deg, tolerating '
+                     f'{_joint_list(names, result.tolerated_joints)}')
+        if 'curve' in stats:
+            curve = stats['curve']
+            lines.append(f'  curve on the self-motion manifolds: '
+                         f'{", ".join(curve["frozen_joints"])} frozen at '
+                         f'{_deg(degrees(curve["frozen_values_rad"]))} deg')
+        for joint, hit in zip(result.tolerated_joints, result.failure_plane_hits, strict=True):
+            lines.append(f'  H{joint + 1} ({names[joint]}) hit on M_g^F: '
+                         f'{_deg(degrees(hit))} deg')
         lines.append(f'  S_F: {result.surface.paths.shape[0]} paths x '
                      f'{result.surface.paths.shape[1]} waypoints, minimum clearance '
                      f'{stats["min_clearance_m"]:.3f} m ({stats["criterion"]})')
-    lines.append(f'plan time {stats["plan_time_s"]:.3f} s, {stats["collision_checks"]} '
+    lines.append(f'plan time {stats["plan_time_s"]:.3f} s, {stats.get("collision_checks", 0)} '
                  f'clearance queries, {stats.get("theta_S", 0)} of '
                  f'{stats.get("start_candidates", 0)} obstacle-free starts pass eq. (6)')
     return '\n'.join(lines)
+
+
+def _joint_list(names, joints) -> str:
+    return 'every joint' if len(joints) == len(names) else ', '.join(names[j] for j in joints)
 
 
 def _deg(values: np.ndarray) -> str:

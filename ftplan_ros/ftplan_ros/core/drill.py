@@ -108,9 +108,10 @@ def run_drill(scene: Scene, result: PlanResult, trials: int, rng: np.random.Gene
 
 
 def summarize_drill(trials: Sequence[DrillTrial], joint_names: Sequence[str]) -> str:
-    """Tabulate trials, successes, worst clearance and goal error per joint and in total."""
-    header = (f'{"joint":<10}{"trials":>7}{"reached":>9}{"min clear [m]":>15}'
-              f'{"max goal err [m]":>18}{"recovery p50/p95 [rad]":>24}')
+    """Tabulate trials, successes, worst clearance and goal errors per joint and in total."""
+    width = max(10, max(map(len, joint_names)) + 2)
+    header = (f'{"joint":<{width}}{"trials":>7}{"reached":>9}{"min clear [m]":>15}'
+              f'{"max goal err [m]":>18}{"[rad]":>10}{"recovery p50/p95 [rad]":>24}')
     rows = [header, '-' * len(header)]
     groups = [(name, [t for t in trials if t.joint == j]) for j, name in enumerate(joint_names)]
     groups.append(('all', list(trials)))
@@ -120,9 +121,10 @@ def summarize_drill(trials: Sequence[DrillTrial], joint_names: Sequence[str]) ->
         lengths = np.array([t.recovery_length for t in group if t.recovered])
         spread = (f'{np.percentile(lengths, 50):.3f} / {np.percentile(lengths, 95):.3f}'
                   if len(lengths) else '-')
-        rows.append(f'{name:<10}{len(group):>7}{sum(t.ok for t in group):>9}'
+        rows.append(f'{name:<{width}}{len(group):>7}{sum(t.ok for t in group):>9}'
                     f'{np.nanmin([t.min_clearance for t in group]):>15.4f}'
-                    f'{np.nanmax([t.goal_error for t in group]):>18.2e}{spread:>24}')
+                    f'{np.nanmax([t.goal_error for t in group]):>18.2e}'
+                    f'{np.nanmax([t.orientation_error for t in group]):>10.1e}{spread:>24}')
     return '\n'.join(rows)
 
 

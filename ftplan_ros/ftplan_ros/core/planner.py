@@ -93,22 +93,29 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
 
 def _with_coverage(scene: Scene, result: PlanResult, options: PlannerOptions,
                    rng: np.random.Generator, report: Callable[[str], None],
-                   cache: ManifoldCache) -> PlanResult:
-    """Add to a failed result the joints a plan could still tolerate, when some block it."""
-    blocked = result.stats.get('blocked_joints') or []
+                   cache: ManifoldCache, attempts: int = 3) -> PlanResult:
+    """Add to a failed result the largest set of joints a plan could still tolerate.
+
+    When some joints' failure planes keep every start from the necessary condition
+    (stats['blocked_joints'], likeliest set first), the others are planned for, set by
+    set, up to `attempts` sets; the first that plans is reported as `coverable_joints`.
+    """
     requested = [scene.robot.joint_names[i] for i in scene.tolerated_joints]
-    others = [name for name in requested if name not in blocked]
-    if not blocked or not others:
-        return result
-    report(f'no plan tolerates {", ".join(blocked)}: trying the other joints')
-    partial = SurfaceSearch(scene.with_tolerated(others), options, rng, report, cache).run()
-    if partial.feasible:
-        addition = (f'; a plan tolerates the locks of {", ".join(others)}: give them as '
-                    '`tolerate` to get it')
-    else:
-        addition = f'; no plan tolerates even the other joints: {partial.reason}'
-    stats = dict(result.stats, coverable_joints=others if partial.feasible else [])
-    return replace(result, reason=result.reason + addition, stats=stats)
+    reason = ''
+    for blocked in (result.stats.get('blocked_joints') or [])[:attempts]:
+        others = [name for name in requested if name not in blocked]
+        if not others:
+            continue
+        report(f'no plan tolerates {", ".join(blocked)}: trying the other joints')
+        partial = SurfaceSearch(scene.with_tolerated(others), options, rng, report,
+                                cache).run()
+        if partial.feasible:
+            return replace(result, stats=dict(result.stats, coverable_joints=others),
+                           reason=result.reason + f'; a plan tolerates the locks of '
+                           f'{", ".join(others)}: give them as `tolerate` to get it')
+        reason = f'; no plan tolerates even the joints but {", ".join(blocked)}: {partial.reason}'
+    return replace(result, reason=result.reason + reason,
+                   stats=dict(result.stats, coverable_joints=[]))
 
 
 def _same_task_point(task) -> bool:

@@ -156,10 +156,12 @@ class SurfaceSearch:
         single_arc = per_arc.all(axis=2)  # (arcs, C)
         stats: dict = {'theta_S': len(theta_S)}
         if len(theta_S) == 0:
-            blocked = [j for k, j in enumerate(self.joints) if not per_arc[:, :, k].any()]
-            stats['blocked_joints'] = [self.robot.joint_names[j] for j in blocked]
-            return _Search(None, self._necessary_condition_reason(blocked, arc_points),
-                           stats, theta_S)
+            options = self._blocking_joints(per_arc.any(axis=0))
+            stats['blocked_joints'] = [[self.robot.joint_names[j] for j in joints]
+                                       for joints in options]
+            everywhere = not per_arc.any(axis=(0, 1))[self.joints.index(options[0][0])]
+            return _Search(None, self._necessary_condition_reason(options, everywhere,
+                                                                  arc_points), stats, theta_S)
         if not single_arc.any():
             return _Search(None, 'the failure planes of every θ_s meet M_g^F only on '
                            'different obstacle-free arcs: no failure surface can join them',
@@ -205,17 +207,41 @@ class SurfaceSearch:
         return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
                        f'{last_reason}', stats, theta_S, proposed)
 
-    def _necessary_condition_reason(self, blocked: list[int],
+    def _blocking_joints(self, passing: np.ndarray) -> list[list[int]]:
+        """Find the sets of joints whose failure planes keep the candidates from eq. 6.
+
+        `passing` (C, J) says which tolerated joint's plane meets M_g^F from which
+        candidate. Joints that no candidate passes block every plan: they are the one
+        set. Otherwise the sets missed by the candidates that miss the fewest joints are
+        the options, the most common first (`plan` tries the others' plans in turn).
+        """
+        never = [j for k, j in enumerate(self.joints) if not passing[:, k].any()]
+        if never:
+            return [never]
+        misses = ~passing
+        count = misses.sum(axis=1)
+        sets, counts = np.unique(misses[count == count.min()], axis=0, return_counts=True)
+        return [[j for k, j in enumerate(self.joints) if row[k]]
+                for row in sets[np.argsort(-counts, kind='stable')]]
+
+    def _necessary_condition_reason(self, options: list[list[int]], everywhere: bool,
                                     arc_points: list[np.ndarray]) -> str:
-        """Say which joints' failure planes miss M_g^F, and why when a joint never moves."""
+        """Say which joints' failure planes miss M_g^F, and why when a joint never moves.
+
+        `everywhere`: the first option's joints miss from every start (else each start
+        misses some joint, the nearest ones one of the options).
+        """
         names = self.robot.joint_names
-        reason = ('no candidate θ_s passes the necessary condition: the failure plane of '
-                  f'{", ".join(names[j] for j in blocked) or "some joint"} misses M_g^F for '
-                  'every start')
+        if everywhere:
+            reason = ('no candidate θ_s passes the necessary condition: the failure plane of '
+                      f'{", ".join(names[j] for j in options[0])} misses M_g^F from every start')
+        else:
+            sets = ' or '.join(', '.join(names[j] for j in joints) for joints in options[:3])
+            reason = ('no candidate θ_s passes the necessary condition for every joint at '
+                      f'once: the starts nearest to it miss the failure planes of {sets}')
         goal = np.vstack(arc_points)
-        for j in blocked:
-            spread = np.ptp(goal[:, j])
-            if spread < 1e-6:
+        for j in options[0] if everywhere else ():
+            if np.ptp(goal[:, j]) < 1e-6:
                 reason += (f'. {names[j]} keeps the same angle, {goal[0, j]:.4f} rad, along the '
                            'whole goal self-motion (a spherical shoulder and wrist fix the '
                            'elbow for a pose): locked anywhere else it can never reach the goal')
