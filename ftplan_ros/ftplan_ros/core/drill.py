@@ -35,7 +35,7 @@ class DrillTrial:
     locked_value: float
     recovered: bool          # `recover` returned a path
     collision_free: bool     # every sample of the executed motion was collision-free
-    min_clearance: float
+    min_clearance: float     # [m] exact below EXACT_BELOW, a lower bound above
     goal_error: float        # [m] of the position
     recovery_length: float
     reached: bool            # the motion ends within the task's tolerances
@@ -122,7 +122,7 @@ def summarize_drill(trials: Sequence[DrillTrial], joint_names: Sequence[str]) ->
         spread = (f'{np.percentile(lengths, 50):.3f} / {np.percentile(lengths, 95):.3f}'
                   if len(lengths) else '-')
         rows.append(f'{name:<{width}}{len(group):>7}{sum(t.ok for t in group):>9}'
-                    f'{np.nanmin([t.min_clearance for t in group]):>15.4f}'
+                    f'{_clearance_text(np.nanmin([t.min_clearance for t in group])):>15}'
                     f'{np.nanmax([t.goal_error for t in group]):>18.2e}'
                     f'{np.nanmax([t.orientation_error for t in group]):>10.1e}{spread:>24}')
     return '\n'.join(rows)
@@ -138,6 +138,11 @@ def drill_json(trials: Sequence[DrillTrial], joint_names: Sequence[str]) -> dict
                         'max_goal_error': _finite_or_none(max(t.goal_error for t in trials)),
                         'max_orientation_error': _finite_or_none(
                             max(t.orientation_error for t in trials))}}
+
+
+def _clearance_text(value: float) -> str:
+    """Format a drill clearance [m]: exact below EXACT_BELOW, bounded from below above it."""
+    return f'>= {EXACT_BELOW:.3f}' if value >= EXACT_BELOW else f'{value:.4f}'
 
 
 def _finite_or_none(value: float) -> float | None:

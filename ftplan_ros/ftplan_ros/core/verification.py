@@ -154,11 +154,27 @@ def structure_problem(surface: FailureSurface) -> str:
     return ''
 
 
+def limits_problem(surface: FailureSurface, robot: Robot) -> str:
+    """Say which joint the web takes past a limit (or where it is not finite), or ''.
+
+    The web's triangles and the recovery paths on them lie in the convex hull of its
+    vertices, so vertices within the limits keep everything within them.
+    """
+    vertices = surface.vertices
+    if not np.all(np.isfinite(vertices)):
+        return 'the web has a point that is not finite'
+    limits = robot.limits
+    outside = ~robot.periodic & ((vertices < limits[:, 0]) | (vertices > limits[:, 1])).any(axis=0)
+    if outside.any():
+        return f'the web leaves the limits of {robot.joint_names[int(np.argmax(outside))]}'
+    return ''
+
+
 def certify_surface(surface: FailureSurface, checker: CollisionChecker, task: Task,
                     options: VerificationOptions | None = None) -> Verdict:
     """Parts 1, 2 and the structure of part 3 (see the module docstring) for the task's goal."""
     options = options or VerificationOptions()
-    problem = structure_problem(surface)
+    problem = limits_problem(surface, checker.robot) or structure_problem(surface)
     if problem:
         return Verdict(False, problem)
     position, orientation = goal_row_error(checker.robot, task, surface.goal_points,
