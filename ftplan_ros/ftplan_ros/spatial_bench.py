@@ -7,12 +7,13 @@ task, in the same run:
 
 * the planner, cold (no traced manifolds kept between tasks), and, when it finds a
   plan, a 50-trial drill of it (dense sampling, core/drill.py) as the referee;
-* the baseline: inverse kinematics of start and goal (the clearest start, the goal
-  nearest it), a joint path between them (straight, or OMPL's RRT-Connect when that
-  collides; checked by sampling), then at 8 moments along it and for every tolerated
-  joint locked there, inverse kinematics of the goal in the failure plane and a
-  straight or RRT-Connect path to it (0.2 s budget each). It answers "yes" when every
-  sampled lock recovers: a sampled check, not a guarantee.
+* the baseline: for each of up to 8 collision-free inverse-kinematics solutions of the
+  start (clearest first), the goal solution nearest it, a joint path between them
+  (straight, or OMPL's RRT-Connect when that collides; checked by sampling), then at 8
+  moments along it and for every tolerated joint locked there, inverse kinematics of
+  the goal in the failure plane and a straight or RRT-Connect path to it (0.2 s budget
+  each). It answers "yes" as soon as one start's sampled locks all recover: a sampled
+  check, not a guarantee.
 
 Times are ratios and percentiles within this run.
 """
@@ -121,51 +122,64 @@ class SampledLockBaseline:
         self.rng = rng
         self.checker = CollisionChecker(scene.robot, scene.obstacles)
 
-    def run(self) -> tuple[bool, str]:
-        """Return whether every sampled lock recovers, and why not."""
+    def run(self, starts: int = 8) -> tuple[bool, str]:
+        """Return whether some start's sampled locks all recover, and why not."""
         task = self.scene.task
-        start = self._clear_solution(np.asarray(task.start))
-        goal = None if start is None else self._clear_solution(np.asarray(task.goal), near=start)
-        if start is None or goal is None:
-            return False, 'no collision-free inverse kinematics of the start or the goal'
-        path = self._joint_path(start, goal, None)
-        if path is None:
-            return False, 'no collision-free joint path from start to goal'
+        why = 'no collision-free inverse kinematics of the start'
+        for start in self._solutions(np.asarray(task.start))[:starts]:
+            goal = self._clear_solution(np.asarray(task.goal), near=start)
+            path = None if goal is None else self._joint_path(start, goal, None)
+            if path is None:
+                why = 'no collision-free joint path from a start to the goal'
+                continue
+            why = self._unrecovered_lock(path)
+            if not why:
+                return True, ''
+        return False, why
+
+    def _unrecovered_lock(self, path: np.ndarray) -> str:
+        """Say which sampled lock along the path does not recover, or ''."""
         for fraction in np.linspace(0.0, 1.0, LOCK_MOMENTS):
             theta = point_at_fraction(path, fraction)
             for joint in self.scene.tolerated_joints:
                 if not self._recovers(theta, joint):
-                    return False, (f'no recovery with {self.robot.joint_names[joint]} locked at '
-                                   f'{fraction:.0%} of the path')
-        return True, ''
+                    return (f'no recovery with {self.robot.joint_names[joint]} locked at '
+                            f'{fraction:.0%} of the path')
+        return ''
 
-    def _clear_solution(self, x: np.ndarray, fixed: int | None = None,
-                        near: np.ndarray | None = None) -> np.ndarray | None:
-        """Return a collision-free inverse-kinematics solution, or None.
+    def _solutions(self, x: np.ndarray) -> np.ndarray:
+        """Collision-free inverse-kinematics solutions (k, n) of x, clearest first."""
+        limits = self.robot.limits
+        seeds = self.rng.uniform(limits[:, 0], limits[:, 1], size=(64, self.robot.n_joints))
+        solved, converged = project_many(self.robot, x, seeds)
+        solved = solved[converged]
+        clearance = self.checker.min_clearance(solved, 0.05)
+        order = np.argsort(-clearance)
+        return solved[order][clearance[order] > 0.0]
 
-        The clearest, or with `near` the one nearest it; `fixed` keeps a joint at its
-        value in `near`.
+    def _clear_solution(self, x: np.ndarray, near: np.ndarray,
+                        fixed: int | None = None) -> np.ndarray | None:
+        """Return the collision-free inverse-kinematics solution nearest `near`, or None.
+
+        `fixed` keeps a joint at its value in `near`.
         """
         limits = self.robot.limits
         seeds = self.rng.uniform(limits[:, 0], limits[:, 1], size=(32, self.robot.n_joints))
-        if near is not None:
-            seeds[0] = near
-            if fixed is not None:
-                seeds[:, fixed] = near[fixed]
+        seeds[0] = near
+        if fixed is not None:
+            seeds[:, fixed] = near[fixed]
         solved, converged = project_many(self.robot, x, seeds, fixed_joint=fixed)
         solved = solved[converged]
         solved = solved[self.checker.min_clearance(solved, 0.0) > 0.0]
         if len(solved) == 0:
             return None
-        if near is None:
-            return solved[int(np.argmax(self.checker.min_clearance(solved, 0.05)))]
         return solved[int(np.argmin(np.linalg.norm(solved - near, axis=1)))]
 
     def _free(self, path: np.ndarray) -> bool:
         return bool(self.checker.min_clearance(densify(path, SAMPLE_STEP), 0.0).min() > 0.0)
 
     def _recovers(self, theta: np.ndarray, joint: int) -> bool:
-        goal = self._clear_solution(np.asarray(self.scene.task.goal), joint, theta)
+        goal = self._clear_solution(np.asarray(self.scene.task.goal), theta, joint)
         return goal is not None and self._joint_path(theta, goal, joint) is not None
 
     def _joint_path(self, start: np.ndarray, goal: np.ndarray, locked: int | None,
