@@ -159,9 +159,10 @@ def _planner_arguments(parser: argparse.ArgumentParser) -> None:
                         help='clearance [m] the guarantee keeps from obstacles (0.0)')
 
 
-def _at_least(value: int, least: int, flag: str) -> None:
-    if value < least:
-        raise InputError(flag, f'must be at least {least}, got {value}')
+def _at_least(value: int, least: int, flag: str, most: int = 2 ** 62) -> None:
+    if not least <= value <= most:
+        raise InputError(flag, f'must be at least {least}, got {value}' if value < least
+                         else f'must be at most {most}, got {value}')
 
 
 def _plan(args: argparse.Namespace, progress: Progress):
@@ -194,7 +195,7 @@ def _plan_command(args: argparse.Namespace) -> int:
 
 
 def _drill_command(args: argparse.Namespace) -> int:
-    _at_least(args.trials, 1, '--trials')
+    _at_least(args.trials, 1, '--trials', 10_000_000)
     progress = Progress()
     scene, result = _plan(args, progress)
     print(_describe(scene, result))
@@ -252,8 +253,8 @@ def _figure_command(args: argparse.Namespace) -> int:
 
 
 def _bench_command(args: argparse.Namespace) -> int:
-    _at_least(args.scenes, 1, '--scenes')
-    _at_least(args.cells, 2, '--cells')
+    _at_least(args.scenes, 1, '--scenes', 100_000)
+    _at_least(args.cells, 2, '--cells', 180)  # 180^3 cells: about 2 GB at the grid's peak
     _at_least(args.seed, 0, '--seed')
     if args.robot != 'planar3r':
         from .spatial_bench import run_spatial_benchmark

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from ftplan_testing import SCENES
 
-from ftplan_ros.core import load_scene, plan, recover
+from ftplan_ros.core import CollisionChecker, InputError, Obstacle, load_scene, plan, recover
 from ftplan_ros.core.scene import parse_scene
 from ftplan_ros.core.verification import VerificationOptions
 
@@ -99,3 +99,51 @@ def test_a_lock_a_hair_past_either_end_of_the_path_recovers():
             theta[joint] += 1e-9 * np.sign(outward[joint] or 1.0)
             rescue = recover(result.surface, theta, joint)
             assert rescue is not None and rescue.path[0, joint] == theta[joint]
+
+
+def test_obstacles_beyond_the_bounds_are_refused_whatever_their_source():
+    """A sphere at 1e200 of radius 2e200 once overflowed the distances to +inf (issue 10)."""
+    with pytest.raises(InputError, match=r'obstacle\.center: must be finite and within'):
+        Obstacle('sphere', (1e200, 0.0, 0.0), radius=2e200)
+    with pytest.raises(InputError, match=r'obstacle\.center'):
+        Obstacle('box', (1e155, 0.0, 0.0), size=(1.0, 1.0, 1.0))
+    with pytest.raises(InputError, match=r'obstacle\.size'):
+        Obstacle('box', (1.0, 0.0, 0.0), size=(math.nan, 1.0, 1.0))
+    with pytest.raises(InputError, match=r'obstacle\.radius: must be > 0'):
+        Obstacle('cylinder', (1.0, 0.0, 0.0), radius=0.0, length=1.0)
+
+
+@pytest.mark.parametrize('limits', [[-1000.0, 1000.0], [-7.0, 0.0]])
+def test_joint_limits_wider_than_a_turn_either_way_are_refused(limits):
+    with pytest.raises(ValueError, match=r'robot\.joint_limits\[1\]: limits must be within ±2π'):
+        parse_scene({'robot': dict(ARM, joint_limits=[None, limits, None]), 'task': TASK})
+
+
+def test_yaml_reads_exponent_floats_and_refuses_duplicate_keys(tmp_path):
+    good = tmp_path / 'tight.yaml'
+    good.write_text('robot: {type: planar, link_lengths: [1.0, 1.0, 1.0]}\n'
+                    'task: {start: [2.0, 0.0], goal: [1.0, 0.0], goal_tolerance: 1e-3}\n')
+    assert load_scene(good).task.goal_tolerance == pytest.approx(1e-3)
+    twice = tmp_path / 'twice.yaml'
+    twice.write_text('robot: {type: planar, link_lengths: [1.0, 1.0, 1.0]}\n'
+                     'task: {start: [2.0, 0.0], goal: [1.0, 0.0], start: [1.5, 0.0]}\n')
+    one_line_error(ftplan('plan', twice), "duplicate key 'start'")
+
+
+@pytest.mark.parametrize('path', ['/dev/zero', '/'])
+def test_a_path_that_is_not_a_regular_file_is_refused_without_reading_it(path):
+    one_line_error(ftplan('plan', path), 'is not a regular file')
+
+
+def test_benchmark_sizes_that_cannot_fit_in_memory_are_refused():
+    one_line_error(ftplan('bench', '--cells', 100000), '--cells: must be at most')
+
+
+def test_obstacles_out_of_reach_do_not_change_the_plan():
+    """1,000 boxes far away are culled (they took 427 s through the planner node once)."""
+    scene = load_scene(SCENES / 'fig3a.yaml')
+    far = [Obstacle('box', (20.0 + k % 40, 20.0 + k // 40, 0.0), size=(0.2, 0.2, 0.2))
+           for k in range(1000)]
+    crowded = scene.with_obstacles(far)
+    assert len(CollisionChecker(crowded.robot, crowded.obstacles)._obstacles) == 3
+    assert np.allclose(plan(crowded).theta_s, plan(scene).theta_s)

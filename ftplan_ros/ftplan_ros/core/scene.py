@@ -17,11 +17,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from .chain import ChainModel
 from .dh import DHRow, chain_from_dh
 from .errors import InputError
+from .files import load_yaml, read_text
 from .robot import PlanarChain, Robot
 from .self_collision import default_disabled_pairs
 from .spatial import SpatialArm
@@ -32,6 +32,8 @@ OBSTACLE_TYPES = ('sphere', 'box', 'cylinder')
 # [m or rad] Largest magnitude of any number: the clearance bounds allow for float rounding
 # of about 1e-6 m, which holds for coordinates up to here (and a scene is not bigger).
 LARGEST_NUMBER = 1.0e6
+# [rad] Widest joint limit: a joint that turns further has no limit (it wraps).
+LARGEST_JOINT_ANGLE = 2.0 * math.pi
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,26 @@ class Obstacle:
     size: tuple[float, float, float] = (0.0, 0.0, 0.0)
     length: float = 0.0
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        """Refuse what no clearance bound can hold: whatever the source (a file, a marker).
+
+        Every number must be finite and within ±LARGEST_NUMBER, and the dimensions the
+        shape uses positive: a sphere of radius 1e200 would overflow the distances to +inf
+        and read as far away.
+        """
+        if self.shape not in OBSTACLE_TYPES:
+            raise InputError('obstacle.type', f'must be one of {", ".join(OBSTACLE_TYPES)}, '
+                             f'got {self.shape!r}')
+        for name in ('center', 'radius', 'size', 'length', 'rpy'):
+            values = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+            if not (np.all(np.isfinite(values)) and np.all(np.abs(values) <= LARGEST_NUMBER)):
+                raise InputError(f'obstacle.{name}', f'must be finite and within '
+                                 f'±{LARGEST_NUMBER:g}, got {getattr(self, name)}')
+        used = {'sphere': ('radius',), 'box': ('size',), 'cylinder': ('radius', 'length')}
+        for name in used[self.shape]:
+            if not np.all(np.asarray(getattr(self, name), dtype=float) > 0.0):
+                raise InputError(f'obstacle.{name}', f'must be > 0, got {getattr(self, name)}')
 
 
 DEFAULT_GOAL_TOLERANCE = 0.01  # [m]
@@ -122,19 +144,7 @@ class Scene:
 def load_scene(path: str | Path, robot: Robot | None = None) -> Scene:
     """Read and validate a scene YAML file (`robot`: the robot when the file has none)."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise InputError(str(path), f'cannot read scene file ({error.strerror})') from None
-    except UnicodeDecodeError:
-        raise InputError(str(path), 'is not UTF-8 text') from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        mark = getattr(error, 'problem_mark', None)
-        where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''
-        problem = getattr(error, 'problem', None) or 'malformed YAML'
-        raise InputError(str(path), f'malformed YAML{where}: {problem}') from None
+    data = load_yaml(read_text(path, str(path)), str(path))
     return parse_scene(data, name=path.stem, directory=path.parent, robot=robot)
 
 
@@ -188,10 +198,7 @@ def parse_tolerated(data: Any, joint_names: Sequence[str], where: str = 'tolerat
 
 
 def _robot_file(path: Path) -> tuple[Any, Path]:
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-        raise InputError('robot', f'cannot read robot file {path.name}: {error}') from None
+    data = load_yaml(read_text(path, 'robot'), f'robot file {path.name}')
     data = _mapping(data, f'robot file {path.name}')
     _check_keys(data, f'robot file {path.name}', required=('robot',), optional=())
     return data['robot'], path.parent
@@ -242,12 +249,7 @@ def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
     if not isinstance(data['file'], str) or not data['file']:
         raise InputError('robot.file', 'must be the path of a URDF file')
     path = directory / data['file']
-    try:
-        xml = path.read_text()
-    except OSError as error:
-        raise InputError('robot.file', f'cannot read {path.name} ({error.strerror})') from None
-    except UnicodeDecodeError:
-        raise InputError('robot.file', f'{path.name} is not UTF-8 text') from None
+    xml = read_text(path, 'robot.file')
     return robot_from_urdf(xml, data['tip_link'], data.get('base_link'),
                            data.get('tip_offset', [0.0, 0.0, 0.0]),
                            data.get('disabled_collisions'),
@@ -457,6 +459,9 @@ def _joint_limit(data: Any, where: str) -> tuple[float, float] | None:
     low, high = _vector(data, where, length=2)
     if not low < high:
         raise InputError(where, f'lower limit {low} must be below upper limit {high}')
+    if max(abs(low), abs(high)) > LARGEST_JOINT_ANGLE:
+        raise InputError(where, f'limits must be within ±2π [rad], got [{low}, {high}]: leave '
+                         'them out (null) for a joint that turns without limit')
     return (low, high)
 
 

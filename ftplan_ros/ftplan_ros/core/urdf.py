@@ -89,7 +89,12 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
             limits.append(None)
         else:
             k = model.joints[j].idx_q
-            limits.append((float(model.lowerPositionLimit[k]), float(model.upperPositionLimit[k])))
+            low, high = float(model.lowerPositionLimit[k]), float(model.upperPositionLimit[k])
+            if not (-2.0 * np.pi <= low < high <= 2.0 * np.pi):
+                raise InputError(f'{where}.file', f'joint {model.names[j]!r} has limits '
+                                 f'[{low}, {high}]: a revolute joint\'s must be an interval '
+                                 'within ±2π [rad] (make it continuous to turn without limit)')
+            limits.append((low, high))
     shapes = []
     for item in geometry.geometryObjects:
         placement = item.placement.homogeneous

@@ -36,7 +36,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from ..core import (
     InputError,
@@ -48,6 +47,7 @@ from ..core import (
     load_scene,
     scene_to_dict,
 )
+from ..core.files import load_yaml, read_text
 
 METHODS = ('paper_surface',)   # the planner's algorithm; more come with later planners
 AXES = ('x', 'y', 'z')
@@ -224,17 +224,7 @@ class Study:
 def load_study(path: str | Path) -> Study:
     """Read and validate a study spec YAML file (its scene path is relative to it)."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as error:
-        raise InputError(str(path), f'cannot read study spec ({error.strerror})') from None
-    except UnicodeDecodeError:
-        raise InputError(str(path), 'is not UTF-8 text') from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, 'problem_mark', None)
-        where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''
-        problem = getattr(error, 'problem', None) or 'malformed YAML'
-        raise InputError(str(path), f'malformed YAML{where}: {problem}') from None
+    data = load_yaml(read_text(path, str(path)), str(path))
     return parse_study(data, name=path.stem, directory=path.parent)
 
 
