@@ -52,12 +52,17 @@ $(ROS_LAYOUT): $(VENV_STAMP) $(LAYOUT_FILES)
 		--event-handlers console_cohesion- summary- status-
 	touch $@
 
-# The main job: plan the paper's scenario among obstacles, drill it, draw it.
+# The main job: plan the paper's scenario among obstacles, drill it, draw it; then the
+# same for the Franka Panda reaching into a shelf (a 7-joint arm, a 6-D pose task).
 demo-core: $(VENV_STAMP)
 	@mkdir -p $(OUT)
 	$(BIN)/ftplan plan config/scenes/fig3a.yaml --json $(OUT)/fig3a_plan.json --png $(OUT)/fig3a_plan.png
 	$(BIN)/ftplan drill config/scenes/fig3a.yaml --trials 200 --seed 1 --png $(OUT)/fig3a_drill.png
 	$(BIN)/ftplan figure config/scenes/fig3a.yaml --out $(OUT)
+	$(BIN)/ftplan plan config/scenes/panda_shelf.yaml --json $(OUT)/panda_shelf_plan.json \
+		--png $(OUT)/panda_shelf_plan.png
+	$(BIN)/ftplan drill config/scenes/panda_shelf.yaml --trials 200 --seed 1 \
+		--json $(OUT)/panda_shelf_drill.json --png $(OUT)/panda_shelf_drill.png
 
 # Then the same through ROS 2: planner, executor, sim and injector nodes in one process,
 # joint2 locked at 40% of the nominal path; writes the executed motion as a PNG. The ROS

@@ -30,13 +30,22 @@ from ftplan_msgs_py.obstacles import (
     create_obstacle_markers,
     read_obstacle_markers,
 )
-from ftplan_msgs_py.path import create_path, read_path
+from ftplan_msgs_py.path import create_path, read_path, read_path_poses
 from ftplan_msgs_py.plan_markers import (
     DEFAULT_JOINT_SPACE_FRAME,
     END_EFFECTOR_NS,
     FAILURE_SURFACE_NS,
     create_plan_markers,
     read_plan_markers,
+)
+from ftplan_msgs_py.pose import (
+    QUATERNION_TOLERANCE,
+    PoseArrays,
+    create_pose,
+    read_point,
+    read_pose,
+    read_quaternion,
+    unit_quaternions,
 )
 from ftplan_msgs_py.stamps import (
     duration_to_seconds,
@@ -55,6 +64,8 @@ __all__ = [
     'DiagnosticReading',
     'JointTrajectoryArrays',
     'LockedJoint',
+    'PoseArrays',
+    'QUATERNION_TOLERANCE',
     'ObstacleKey',
     'ObstacleShape',
     'create_diagnostic_array',
@@ -66,6 +77,7 @@ __all__ = [
     'create_obstacle_markers',
     'create_path',
     'create_plan_markers',
+    'create_pose',
     'duration_to_seconds',
     'read_diagnostic_status',
     'read_failure_surface',
@@ -74,8 +86,13 @@ __all__ = [
     'read_locked_joint',
     'read_obstacle_markers',
     'read_path',
+    'read_path_poses',
     'read_plan_markers',
+    'read_point',
+    'read_pose',
+    'read_quaternion',
     'seconds_to_duration',
     'seconds_to_time',
     'time_to_seconds',
+    'unit_quaternions',
 ]

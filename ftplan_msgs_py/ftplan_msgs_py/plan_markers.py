@@ -1,6 +1,8 @@
 """Create and read the RViz markers that show a plan result.
 
-Workspace objects (arm poses, the end-effector path) are drawn in the base frame [m].
+Workspace objects (arm poses, the end-effector path) are drawn in 3-D in the base frame
+[m]; an arm pose is a LINE_STRIP through its skeleton (base, joints, tool) plus a
+SPHERE_LIST at its points, ids 0 and 1 of one namespace (planar arms give z = 0).
 Joint-space objects (self-motion manifolds, failure-plane hits, the failure surface S_F)
 are drawn in a separate frame whose x, y, z are the first three joint angles [rad].
 """
@@ -22,18 +24,25 @@ END_EFFECTOR_NS = 'end_effector_path'
 FAILURE_SURFACE_NS = 'failure_surface'
 DEFAULT_JOINT_SPACE_FRAME = 'ftplan_joint_space'
 WORKSPACE_LINE_WIDTH = 0.02  # [m]
+ARM_JOINT_DIAMETER = 0.04  # [m]
 JOINT_SPACE_LINE_WIDTH = 0.01  # [rad], drawn as metres
 JOINT_SPACE_POINT_DIAMETER = 0.05  # [rad], drawn as metres
 _GOLDEN_RATIO_CONJUGATE = 0.618033988749895
 _SURFACE_ALPHA = 0.6
 
 
-class _Layer(NamedTuple):
-    ns: str
-    frame_id: str
+class _Part(NamedTuple):
     marker_type: int
     scale: tuple[float, float, float]
-    point_sets: list[NDArray[np.float64]]
+    points: NDArray[np.float64]
+
+
+class _Layer(NamedTuple):
+    """One namespace: its markers (ids 0, 1, ...) share a frame and a colour."""
+
+    ns: str
+    frame_id: str
+    parts: list[_Part]
     alpha: float = 1.0
 
 
@@ -104,8 +113,9 @@ def create_plan_markers(
 
     :param frame_id: the base frame of the workspace objects.
     :param stamp: stamp of every marker; None leaves it zero.
-    :param arm_polylines: ns -> (k, 2|3) joint positions [m] of one arm pose (e.g.
-        'arm_theta_s', 'arm_hit_1'), each drawn as a LINE_STRIP.
+    :param arm_polylines: ns -> (k, 2|3) points [m] of one arm pose, base to tool (e.g.
+        'arm_theta_s', 'arm_hit_1'): a LINE_STRIP (id 0) and a SPHERE_LIST (id 1) at the
+        points; 2-D points get z = 0.
     :param end_effector_path: (k, 2|3) positions [m], a LINE_STRIP in 'end_effector_path'.
     :param joint_space_frame: the frame of the joint-space objects.
     :param joint_space_curves: ns -> list of (k, n) joint paths [rad] (e.g. sampled
@@ -119,32 +129,36 @@ def create_plan_markers(
     """
     base = frame(frame_id, 'frame_id')
     joint_frame = frame(joint_space_frame, 'joint_space_frame')
-    layers = [
-        _Layer(ns, base, Marker.LINE_STRIP, _line(WORKSPACE_LINE_WIDTH),
-               [_workspace_polyline(polyline, f'arm_polylines[{ns!r}]')])
-        for ns, polyline in (arm_polylines or {}).items()
-    ]
+    layers = [_arm_layer(ns, base, polyline) for ns, polyline in (arm_polylines or {}).items()]
     if end_effector_path is not None:
-        layers.append(_Layer(END_EFFECTOR_NS, base, Marker.LINE_STRIP,
-                             _line(WORKSPACE_LINE_WIDTH),
-                             [_workspace_polyline(end_effector_path, 'end_effector_path')]))
+        layers.append(_Layer(END_EFFECTOR_NS, base, [_Part(
+            Marker.LINE_STRIP, _line(WORKSPACE_LINE_WIDTH),
+            _workspace_polyline(end_effector_path, 'end_effector_path'))]))
     for ns, curves in (joint_space_curves or {}).items():
-        point_sets = [
-            _joint_space_points(curve, f'joint_space_curves[{ns!r}][{i}]', 2)
-            for i, curve in enumerate(curves)
-        ]
-        layers.append(_Layer(ns, joint_frame, Marker.LINE_STRIP,
-                             _line(JOINT_SPACE_LINE_WIDTH), point_sets))
+        layers.append(_Layer(ns, joint_frame, [
+            _Part(Marker.LINE_STRIP, _line(JOINT_SPACE_LINE_WIDTH),
+                  _joint_space_points(curve, f'joint_space_curves[{ns!r}][{i}]', 2))
+            for i, curve in enumerate(curves)]))
     for ns, points in (joint_space_points or {}).items():
-        layers.append(_Layer(ns, joint_frame, Marker.SPHERE_LIST,
-                             _spheres(JOINT_SPACE_POINT_DIAMETER),
-                             [_joint_space_points(points, f'joint_space_points[{ns!r}]', 0)]))
+        layers.append(_Layer(ns, joint_frame, [_Part(
+            Marker.SPHERE_LIST, _spheres(JOINT_SPACE_POINT_DIAMETER),
+            _joint_space_points(points, f'joint_space_points[{ns!r}]', 0))]))
     if surface_paths is not None:
         segments = _surface_segments(surface_paths)
         if len(segments):
-            layers.append(_Layer(FAILURE_SURFACE_NS, joint_frame, Marker.LINE_LIST,
-                                 _line(JOINT_SPACE_LINE_WIDTH), [segments], _SURFACE_ALPHA))
+            layers.append(_Layer(FAILURE_SURFACE_NS, joint_frame, [_Part(
+                Marker.LINE_LIST, _line(JOINT_SPACE_LINE_WIDTH), segments)], _SURFACE_ALPHA))
+    _check_namespaces(layers)
+    return MarkerArray(markers=_markers(layers, base, stamp))
 
+
+def _arm_layer(ns: str, frame_id: str, polyline: ArrayLike) -> _Layer:
+    points = _workspace_polyline(polyline, f'arm_polylines[{ns!r}]')
+    return _Layer(ns, frame_id, [_Part(Marker.LINE_STRIP, _line(WORKSPACE_LINE_WIDTH), points),
+                                 _Part(Marker.SPHERE_LIST, _spheres(ARM_JOINT_DIAMETER), points)])
+
+
+def _check_namespaces(layers: list[_Layer]) -> None:
     seen: set[str] = set()
     for layer in layers:
         if not isinstance(layer.ns, str) or not layer.ns:
@@ -156,22 +170,25 @@ def create_plan_markers(
             )
         seen.add(layer.ns)
 
+
+def _markers(layers: list[_Layer], base: str, stamp: Time | None) -> list[Marker]:
+    """Return a DELETEALL, then one ADD marker per part of each layer (ids 0, 1, ... per ns)."""
     marker_stamp = stamp_or_zero(stamp)
     markers = [Marker(header=Header(stamp=stamp_or_zero(marker_stamp), frame_id=base),
                       action=Marker.DELETEALL)]
     for index, layer in enumerate(layers):
-        for marker_id, points in enumerate(layer.point_sets):
+        for marker_id, part in enumerate(layer.parts):
             markers.append(Marker(
                 header=Header(stamp=stamp_or_zero(marker_stamp), frame_id=layer.frame_id),
                 ns=layer.ns,
                 id=marker_id,
-                type=layer.marker_type,
+                type=part.marker_type,
                 action=Marker.ADD,
-                scale=Vector3(x=layer.scale[0], y=layer.scale[1], z=layer.scale[2]),
+                scale=Vector3(x=part.scale[0], y=part.scale[1], z=part.scale[2]),
                 color=_color(index, layer.alpha),
-                points=[Point(x=x, y=y, z=z) for x, y, z in points.tolist()],
+                points=[Point(x=x, y=y, z=z) for x, y, z in part.points.tolist()],
             ))
-    return MarkerArray(markers=markers)
+    return markers
 
 
 def read_plan_markers(msg: MarkerArray) -> dict[str, list[NDArray[np.float64]]]:

@@ -9,7 +9,8 @@ scene's task and then, for each run, resets the sim, executes the plan and lets 
 injector lock a joint: first one run per `--drill JOINT@FRACTION` (or JOINT@SECONDSs),
 then `--trials N` runs with a random joint at a random moment (seed `--seed`); with
 neither, one run without a failure. It prints a summary (plan time, the joint and moment
-of each failure, recovery time, goal error, minimum clearance) and exits 0 only when
+of each failure, recovery time, goal errors in position [m] and, for axis and pose
+tasks, orientation [rad], minimum clearance) and exits 0 only when
 every run reached the goal without a collision, 1 otherwise, 2 on bad input and 130 on
 Ctrl-C (after shutting every node down).
 """
@@ -35,6 +36,7 @@ from sensor_msgs.msg import JointState
 from ftplan_msgs_py import read_joint_state
 
 from .core import InputError, Scene, load_scene
+from .core.task_space import format_point
 from .nodes.executor import ExecutorNode
 from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode
@@ -81,6 +83,7 @@ class RunReport:
     lock_progress: float = float('nan')    # fraction of the nominal path when it locked
     recovery_time: float = float('nan')    # lock event -> goal
     goal_error: float = float('nan')
+    goal_orientation_error: float = float('nan')
     min_clearance: float = float('nan')
     collisions: int = 0
     lock_configuration: np.ndarray | None = None   # (n,) where the arm stopped, locked
@@ -145,8 +148,8 @@ class Director:
             raise InputError('task', f'scene {self.scene.name} has no task to plan')
         if not self.client.wait_until_ready(timeout=10.0):
             return PlannedMotion(Outcome.UNAVAILABLE, 'the planner or executor did not start')
-        self.progress.line(f'planning {self.scene.name}: {list(task.start)} -> '
-                           f'{list(task.goal)} m')
+        self.progress.line(f'planning {self.scene.name}: {format_point(task.kind, task.start)}'
+                           f' -> {format_point(task.kind, task.goal)} m')
         self.motion = self.client.plan(goal=task.goal, start=task.start,
                                        frame_id=self.scene.frame_id, timeout=timeout)
         return self.motion
@@ -194,25 +197,37 @@ class Director:
         return RunReport(
             number, drill, ok, why, values.get('locked_joint', ''),
             report.number('lock_progress'), report.number('recovery_time_s'),
-            parse_number(sim.get('goal_error_m')), parse_number(sim.get('min_clearance_m')),
+            parse_number(sim.get('goal_error_m')),
+            parse_number(sim.get('goal_orientation_error_rad')),
+            parse_number(sim.get('min_clearance_m')),
             collisions, np.array(parse_vector(lock)) if lock else None,
             np.array(self.recording) if record and self.recording else None)
 
 
 def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) -> str:
     """Tabulate the plan, then one row per run, then the verdict."""
+    tolerated = f', tolerates {", ".join(motion.tolerated_joints)}' \
+        if motion.tolerated_joints and len(motion.tolerated_joints) < len(motion.joint_names) \
+        else ''
     lines = [f'scene {scene.name}: plan {motion.plan_time_s:.3f} s (service round trip '
              f'{motion.round_trip_s:.3f} s), theta_s = '
              f'[{", ".join(f"{v:.3f}" for v in motion.theta_s)}] rad, '
-             f'{len(motion.trajectory)} waypoints, S_F of {motion.surface.shape[0]} paths']
-    header = (f'{"run":>4}  {"drill":<16}{"locked":<9}{"at [%]":>7}{"recovery [s]":>14}'
-              f'{"goal err [m]":>14}{"min clear [m]":>15}  result')
+             f'{len(motion.trajectory)} waypoints, S_F of {motion.surface.shape[0]} paths'
+             f'{tolerated}']
+    oriented = scene.task is not None and scene.task.kind in ('axis', 'pose')
+    width = max(9, 2 + max((len(r.locked_joint) for r in runs), default=0))
+    drill_width = max(16, 2 + max((len(r.drill) for r in runs), default=0))
+    header = (f'{"run":>4}  {"drill":<{drill_width}}{"locked":<{width}}{"at [%]":>7}'
+              f'{"recovery [s]":>14}{"goal err [m]":>14}'
+              + (f'{"[rad]":>10}' if oriented else '') + f'{"min clear [m]":>15}  result')
     lines += [header, '-' * len(header)]
     for r in runs:
         at = f'{100 * r.lock_progress:.1f}' if np.isfinite(r.lock_progress) else '-'
         recovery = f'{r.recovery_time:.2f}' if np.isfinite(r.recovery_time) else '-'
-        lines.append(f'{r.run:>4}  {r.drill or "-":<16}{r.locked_joint or "-":<9}{at:>7}'
-                     f'{recovery:>14}{r.goal_error:>14.2e}{r.min_clearance:>15.4f}  '
+        angle = f'{r.goal_orientation_error:>10.2e}' if oriented else ''
+        lines.append(f'{r.run:>4}  {r.drill or "-":<{drill_width}}{r.locked_joint or "-":<{width}}'
+                     f'{at:>7}{recovery:>14}{r.goal_error:>14.2e}{angle}'
+                     f'{r.min_clearance:>15.4f}  '
                      f'{"reached" if r.ok else "FAILED: " + r.message}')
     recoveries = np.array([r.recovery_time for r in runs if np.isfinite(r.recovery_time)])
     if len(recoveries):

@@ -7,6 +7,7 @@ In the spirit of nav2_simple_commander's BasicNavigator: a Node that owns its sp
     client = PlanClient()
     client.wait_until_ready()
     motion = client.plan(goal=(1.0, 0.0))          # from where the arm is now
+    # a spatial arm: goal=(x, y, z) or (x, y, z, qx, qy, qz, qw), as the planner's task_kind
     if motion.result is Outcome.SUCCEEDED:
         report = client.execute(motion)
         print(report.result, report.message)
@@ -29,7 +30,7 @@ from enum import Enum
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Point, Pose, PoseStamped
+from geometry_msgs.msg import PoseStamped
 from nav_msgs.srv import GetPlan
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -40,15 +41,18 @@ from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import (
     DiagnosticReading,
+    create_pose,
     read_diagnostic_status,
     read_failure_surface,
     read_joint_state,
     read_joint_trajectory,
-    read_path,
+    read_path_poses,
 )
 
+from .nodes.plan_info import read_plan_info
 from .nodes.qos import LATCHED_QOS
 from .nodes.reporting import parse_number, stamp_key
+from .nodes.tasks import pose_of_task_point
 from .nodes.topics import (
     DIAGNOSTICS,
     EXECUTE_SERVICE,
@@ -85,6 +89,7 @@ class PlannedMotion:
     stamp: str = ''                          # the plan's stamp 'sec.nanosec'
     joint_names: tuple[str, ...] = ()
     path: np.ndarray | None = None           # (k, 3) end-effector path
+    orientations: np.ndarray | None = None   # (k, 4) its quaternions (x, y, z, w)
     theta_s: np.ndarray | None = None        # (n,) start configuration
     trajectory: np.ndarray | None = None     # (k, n) nominal joint path
     times: np.ndarray | None = None          # (k,) its times from start
@@ -92,6 +97,8 @@ class PlannedMotion:
     nominal_index: int | None = None         # which path of S_F is the nominal one
     round_trip_s: float = float('nan')       # request sent -> response received
     plan_time_s: float = float('nan')        # the core's plan time, from the planner's status
+    task_kind: str = ''                      # planar, position, axis or pose (planner's status)
+    tolerated_joints: tuple[str, ...] = ()   # whose lock the plan survives (planner's status)
 
     @property
     def succeeded(self) -> bool:
@@ -224,13 +231,16 @@ class PlanClient(Node):
                 return False
         return True
 
-    def plan(self, goal: Sequence[float] | None = None, start: Sequence[float] | None = None,
+    def plan(self, goal: Sequence[float] | PoseStamped | None = None,
+             start: Sequence[float] | PoseStamped | None = None,
              tolerance: float = 0.0, frame_id: str = 'base_link',
              timeout: float = 30.0) -> PlannedMotion:
         """Ask for a failure-tolerant plan from `start` (None: where the arm is) to `goal`.
 
-        :param goal: (2,) or (3,) goal position [m] in `frame_id`; None: the scene's goal.
-        :param start: start position [m] in `frame_id`; None: the arm's current position.
+        :param goal: a task point in `frame_id` [m] (task_space.py: (x, y), (x, y, z),
+            (x, y, z, ax, ay, az) or (x, y, z, qx, qy, qz, qw)) or a PoseStamped; None: the
+            scene's goal. What the planner takes from it is its `task_kind`.
+        :param start: likewise; None: the arm's current position.
         :param tolerance: goal tolerance [m]; 0 keeps the scene's.
         :param timeout: seconds to wait for the answer and the latched plan topics.
         """
@@ -248,6 +258,7 @@ class PlanClient(Node):
         status = self.wait_for_status(self._planner_status, lambda v: v.get('stamp') == key,
                                       1.0 if not response.plan.poses else 0.2, mark)
         plan_time = parse_number(status.values.get('plan_time_s')) if status else float('nan')
+        info = read_plan_info(status.values) if status else None
         if not response.plan.poses:
             reason = status.message if status else \
                 'no failure-tolerant plan (the planner\'s reason did not arrive)'
@@ -262,9 +273,16 @@ class PlanClient(Node):
             return PlannedMotion(Outcome.FAILED, f'plan {key}: {gathered}', key,
                                  round_trip_s=round_trip, plan_time_s=plan_time)
         names, theta_s, trajectory, times, surface, index = gathered
+        try:
+            path, orientations = read_path_poses(response.plan)
+        except ValueError as error:
+            return PlannedMotion(Outcome.FAILED, f'plan {key}: unreadable Path: {error}', key,
+                                 round_trip_s=round_trip, plan_time_s=plan_time)
         return PlannedMotion(Outcome.SUCCEEDED, status.message if status else 'plan found',
-                             key, names, read_path(response.plan), theta_s, trajectory, times,
-                             surface, index, round_trip, plan_time)
+                             key, names, path, orientations, theta_s, trajectory, times,
+                             surface, index, round_trip, plan_time,
+                             info.task_kind if info else '',
+                             info.tolerated_joints if info else ())
 
     def _gather_plan(self, key: str, timeout: float):
         """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in.
@@ -345,15 +363,17 @@ class PlanClient(Node):
         return response.success, response.message
 
 
-def _pose(position: Sequence[float] | None, frame_id: str) -> PoseStamped:
-    """Make a PoseStamped at `position` [m] in `frame_id`; None gives an empty frame."""
-    if position is None:
+def _pose(point: Sequence[float] | PoseStamped | None, frame_id: str) -> PoseStamped:
+    """Make a PoseStamped of a task point in `frame_id`; None gives an empty frame.
+
+    An axis becomes an orientation whose z axis is the axis; a PoseStamped is kept.
+    """
+    if point is None:
         return PoseStamped()
-    if len(position) not in (2, 3):
-        raise ValueError(f'a position has 2 or 3 coordinates [m], got {list(position)}')
-    xyz = [float(v) for v in position] + [0.0] * (3 - len(position))
-    return PoseStamped(header=Header(frame_id=frame_id),
-                       pose=Pose(position=Point(x=xyz[0], y=xyz[1], z=xyz[2])))
+    if isinstance(point, PoseStamped):
+        return point
+    position, quaternion = pose_of_task_point([float(v) for v in point])
+    return PoseStamped(header=Header(frame_id=frame_id), pose=create_pose(position, quaternion))
 
 
 def _execution_number(message: str) -> int | None:

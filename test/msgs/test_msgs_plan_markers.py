@@ -15,6 +15,10 @@ from ftplan_msgs_py.plan_markers import (
 
 BASE = 'base_link'
 ARM = np.array([[0.0, 0.0], [1.0, 0.0], [1.5, 0.8], [2.0, 0.0]])
+# A 7-joint arm's skeleton: base, seven joint origins, tool (k, 3) [m].
+ARM_3D = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.333], [0.0, 0.0, 0.333], [0.0, 0.0, 0.649],
+                   [0.083, 0.0, 0.649], [0.0, 0.0, 1.033], [0.0, 0.0, 1.033],
+                   [0.088, 0.0, 1.033], [0.088, 0.0, 0.926]])
 EE_PATH = np.array([[2.0, 0.0, 0.0], [1.5, 0.2, 0.0], [1.0, 0.0, 0.0]])
 MANIFOLD = [np.array([[0.0, 0.1, 0.2, 9.0], [0.3, 0.4, 0.5, 9.0]]),
             np.array([[1.0, 1.1, 1.2, 9.0], [1.3, 1.4, 1.5, 9.0], [1.6, 1.7, 1.8, 9.0]])]
@@ -56,8 +60,9 @@ def test_round_trip_of_every_object():
     read = read_plan_markers(full_plan())
     assert set(read) == {'arm_theta_s', 'arm_hit_1', 'end_effector_path', 'manifold_start',
                          'failure_plane_hits', 'failure_surface'}
-    (arm,) = read['arm_theta_s']
-    assert np.allclose(arm, np.column_stack([ARM, np.zeros(len(ARM))]))
+    line, joints = read['arm_theta_s']          # a LINE_STRIP and a SPHERE_LIST
+    assert np.allclose(line, np.column_stack([ARM, np.zeros(len(ARM))]))
+    assert np.array_equal(joints, line)
     assert np.allclose(read['arm_hit_1'][0][:, :2], ARM[::-1])
     assert np.allclose(read['end_effector_path'][0], EE_PATH)
     assert len(read['manifold_start']) == 2
@@ -82,12 +87,27 @@ def test_single_point_surface_has_no_marker():
     assert 'failure_surface' not in read_plan_markers(msg)
 
 
+def test_a_spatial_arm_is_a_line_through_its_skeleton_and_spheres_at_its_joints():
+    msg = create_plan_markers(BASE, arm_polylines={'arm_theta_s': ARM_3D},
+                              end_effector_path=ARM_3D[-3:])
+    line, joints = by_ns(msg)['arm_theta_s']
+    assert (line.id, line.type, joints.id, joints.type) == (0, Marker.LINE_STRIP, 1,
+                                                            Marker.SPHERE_LIST)
+    assert joints.scale.x == joints.scale.y == joints.scale.z > 0.0
+    read = read_plan_markers(msg)
+    assert np.allclose(read['arm_theta_s'][0], ARM_3D)
+    assert np.allclose(read['arm_theta_s'][1], ARM_3D)
+    assert np.allclose(read['end_effector_path'][0], ARM_3D[-3:])
+
+
 def test_frames_types_ids_and_stamps():
     groups = by_ns(full_plan())
-    for ns in ('arm_theta_s', 'arm_hit_1', 'end_effector_path'):
-        (marker,) = groups[ns]
-        assert marker.header.frame_id == BASE
-        assert marker.type == Marker.LINE_STRIP
+    for ns in ('arm_theta_s', 'arm_hit_1'):
+        line, joints = groups[ns]
+        assert line.header.frame_id == joints.header.frame_id == BASE
+        assert (line.type, joints.type) == (Marker.LINE_STRIP, Marker.SPHERE_LIST)
+    (marker,) = groups['end_effector_path']
+    assert marker.header.frame_id == BASE and marker.type == Marker.LINE_STRIP
     assert [m.id for m in groups['manifold_start']] == [0, 1]
     assert all(m.type == Marker.LINE_STRIP for m in groups['manifold_start'])
     assert groups['failure_plane_hits'][0].type == Marker.SPHERE_LIST

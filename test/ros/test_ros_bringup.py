@@ -4,6 +4,7 @@ import sys
 from pathlib import Path
 
 from ros_support import FIG3A, wait_for
+from spatial_scenes import panda_scene
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
@@ -40,3 +41,16 @@ def test_ctrl_c_shuts_every_node_down_cleanly(processes):
     assert code == 130, out + err
     assert 'interrupted; shutting the nodes down' in err
     assert 'Traceback' not in err and 'exception' not in err.lower()
+
+
+def test_a_drill_of_a_7_joint_arm_through_the_bringup(processes, tmp_path):
+    png = tmp_path / 'panda.png'
+    bringup = processes(BRINGUP + ['--scene', panda_scene(tmp_path), '--drill',
+                                   'panda_joint2@0.4', '--png', png])
+    code, out, err = bringup.wait(timeout=300)
+    assert code == 0, out + err
+    assert '1/1 runs reached the goal without collision' in out
+    assert 'tolerates panda_joint1, panda_joint2, panda_joint3, panda_joint5' in out
+    row = next(line for line in out.splitlines() if 'panda_joint2@0.4' in line)
+    assert row.split()[2] == 'panda_joint2' and row.endswith('reached')
+    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'

@@ -1,12 +1,16 @@
 """The nodes' small helpers: path timing and progress, approach moves, obstacle shapes."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from ros_support import SCENES
+from scipy.spatial.transform import Rotation
+from spatial_scenes import panda_scene
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import create_obstacle_markers
-from ftplan_ros.core import Obstacle, load_scene
+from ftplan_ros.core import CollisionChecker, InputError, Obstacle, Task, load_scene, task_errors
 from ftplan_ros.core.angles import wrap_angle
 from ftplan_ros.nodes.motion import progress_along, straight_moves, time_path
 from ftplan_ros.nodes.obstacles import (
@@ -17,7 +21,15 @@ from ftplan_ros.nodes.obstacles import (
     shape_from_obstacle,
 )
 from ftplan_ros.nodes.planner import display_web
-from ftplan_ros.nodes.sim import Motion, default_initial_configuration
+from ftplan_ros.nodes.sim import Motion, default_initial_configuration, task_scene
+from ftplan_ros.nodes.tasks import (
+    bind_task_kind,
+    convert_task_point,
+    end_effector_poses,
+    kind_of_point,
+    pose_of_task_point,
+    task_point,
+)
 
 
 def test_time_path_keeps_the_speed_limit_and_strictly_increasing_times():
@@ -103,3 +115,71 @@ def test_the_rviz_web_is_thinned_but_keeps_its_border():
     assert thin.shape == (40, 40, 3)
     assert np.array_equal(thin[0, 0], web[0, 0]) and np.array_equal(thin[-1, -1], web[-1, -1])
     assert display_web(web[:5, :7]).shape == (5, 7, 3)
+
+
+@pytest.mark.parametrize('kind', ['pose', 'position'])
+def test_the_default_initial_configuration_of_a_7_joint_arm_is_at_the_start_within_limits(
+        tmp_path, kind):
+    """r = 1 (pose): the clearest point of M_s; r = 4 (position): the clearest IK solution."""
+    scene = task_scene(load_scene(panda_scene(tmp_path)), kind)
+    robot = scene.robot
+    theta = default_initial_configuration(scene)
+    assert np.all(task_errors(robot, np.array(scene.task.start), theta) < 1e-9)
+    assert np.all(robot.limits[:, 0] <= theta) and np.all(theta <= robot.limits[:, 1])
+    assert CollisionChecker(robot, scene.obstacles).min_clearance(theta[None])[0] > 0.0
+    unreachable = replace(scene, task=Task((5.0,) * len(scene.task.start),
+                                           scene.task.goal))
+    fallback = default_initial_configuration(unreachable)
+    assert np.all(robot.limits[:, 0] <= fallback) and np.all(fallback <= robot.limits[:, 1])
+
+
+def test_task_points_from_poses_and_between_kinds():
+    rotation = Rotation.from_euler('xyz', [0.3, -0.5, 1.1])
+    q = rotation.as_quat()
+    p = np.array([0.4, -0.2, 0.6])
+    pose = task_point('pose', p, q)
+    axis = task_point('axis', p, q)
+    assert np.allclose(axis[3:], rotation.as_matrix()[:, 2])
+    assert np.array_equal(task_point('position', p, None), p)
+    assert np.array_equal(task_point('planar', p, None), p[:2])
+    assert np.allclose(convert_task_point(pose, 'axis'), axis)
+    assert np.allclose(convert_task_point(axis, 'position'), p)
+    assert convert_task_point(axis, 'pose') is None
+    assert convert_task_point(p, 'axis') is None and convert_task_point(p[:2], 'position') is None
+    # Back to a pose: an axis becomes an orientation whose z axis it is.
+    position, quaternion = pose_of_task_point(axis)
+    assert np.allclose(position, p)
+    assert np.allclose(Rotation.from_quat(quaternion).as_matrix()[:, 2], axis[3:])
+    assert np.allclose(pose_of_task_point(pose)[1], q)
+    planar_position, no_orientation = pose_of_task_point([1.0, 2.0])
+    assert np.array_equal(planar_position, [1.0, 2.0, 0.0]) and no_orientation is None
+    with pytest.raises(ValueError, match='2, 3, 6 or 7 numbers'):
+        kind_of_point([0.0] * 4)
+
+
+def test_task_kinds_bind_spatial_arms_only(tmp_path):
+    arm = load_scene(panda_scene(tmp_path)).robot
+    assert bind_task_kind(arm, 'axis').task_dim == 5 and bind_task_kind(arm, '') is arm
+    planar = load_scene(SCENES / 'paper_a_free.yaml').robot
+    assert bind_task_kind(planar, 'planar') is planar
+    with pytest.raises(InputError, match="task_kind: 'position': a planar arm"):
+        bind_task_kind(planar, 'position')
+    with pytest.raises(InputError, match="'planar': a spatial arm"):
+        bind_task_kind(arm, 'planar')
+    positions, orientations = end_effector_poses(arm, np.zeros((3, 7)))
+    assert positions.shape == (3, 3) and orientations.shape == (3, 4)
+    assert end_effector_poses(planar, np.zeros((2, 3)))[1] is None
+
+
+def test_obstacles_that_come_before_the_robot_wait_for_it():
+    scene = load_scene(SCENES / 'paper_a_free.yaml')
+    obstacles = ObstacleSet(None)
+    sphere = shape_from_obstacle(('a', 0), Obstacle('sphere', (1.0, 1.0, 0.0), radius=0.1))
+    obstacles.update(create_obstacle_markers([sphere], 'base_link'))
+    obstacles.update(create_obstacle_markers([sphere], 'map'))         # wrong frame
+    assert obstacles.scene() is None and obstacles.checker is None and obstacles.pending == 2
+    problems = obstacles.rebase(scene)
+    assert len(problems) == 1 and "in frame 'map'" in problems[0]
+    assert len(obstacles) == 1 and obstacles.pending == 0
+    assert obstacles.checker.min_clearance(np.zeros((1, 3)))[0] > 0.0
+    assert obstacles.scene().obstacles[0].radius == pytest.approx(0.1)

@@ -2,12 +2,14 @@
 
 import numpy as np
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.parameter import Parameter
 from ros_support import wait_for
 from sensor_msgs.msg import JointState
+from spatial_scenes import JOINTS, TOLERATED, panda_scene
 from std_srvs.srv import Trigger
 
-from ftplan_msgs_py import read_locked_joint
+from ftplan_msgs_py import create_diagnostic_array, create_diagnostic_status, read_locked_joint
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.injector import Drill, InjectorNode, parse_drill, random_drill
 from ftplan_ros.nodes.planner import PlannerNode
@@ -93,3 +95,19 @@ def test_a_drill_in_seconds_at_the_start_locks_during_the_approach(ros):
     assert second.number('lock_progress') >= 0.5
     wait_for(lambda: ros.probe.logged('ftplan_injector', 'execution 2: drill joint2@0.5'))
     assert ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request()).success
+
+
+def test_random_drills_lock_only_the_joints_the_plan_tolerates(ros, tmp_path):
+    """The executor's status names the plan's tolerated joints; random drills draw from them."""
+    injector = ros.make(InjectorNode, panda_scene(tmp_path), random_drills=-1, seed=4)
+    ros.probe.advertise(DiagnosticArray, '/diagnostics', readers=1)
+    drills = []
+    for execution in range(1, 41):
+        values = {'state': 'approaching', 'execution': execution, 'plan': '1.0',
+                  'tolerated_joints': ','.join(TOLERATED if execution <= 30 else JOINTS[:2])}
+        ros.probe.publish(DiagnosticArray, '/diagnostics', create_diagnostic_array(
+            [create_diagnostic_status('ftplan_executor: execution', 'OK', 'approaching', values)]))
+        wait_for(lambda e=execution: injector.execution == e, what=f'execution {execution}')
+        drills.append(injector.drill.joint)
+    assert set(drills[:30]) == set(TOLERATED)            # every tolerated joint, elbow never
+    assert set(drills[30:]) <= set(JOINTS[:2])

@@ -12,8 +12,11 @@ from ament_index_python.packages import (
 from geometry_msgs.msg import Point, Pose, PoseStamped
 from nav_msgs.srv import GetPlan
 from ros_support import FIG3A, INSTALL, PARAMS, installed, require_install, wait_for
-from std_msgs.msg import Header
+from spatial_scenes import PANDA_URDF, X_G, X_S, panda_scene
+from std_msgs.msg import Header, String
 
+from ftplan_msgs_py import create_pose
+from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.plan_client import Outcome, PlanClient
 
 EXECUTABLES = ('planner', 'injector', 'executor', 'sim', 'bringup')
@@ -95,3 +98,26 @@ def test_a_bad_scene_file_stops_the_node_with_exit_code_2(processes):
     code, _, err = planner.wait(timeout=60.0)
     assert code == 2
     assert 'cannot start' in err and '/nonexistent/scene.yaml' in err
+
+
+def test_the_installed_planner_takes_a_panda_from_robot_description(ros, processes, tmp_path):
+    """A scene without a robot, the Panda's description parameters from their params file."""
+    scene_file = panda_scene(tmp_path, robot=False)
+    planner = processes([installed('planner'), '--ros-args',
+                         '--params-file', PARAMS / 'planner.yaml',
+                         '--params-file', PARAMS / 'robot_description.yaml',
+                         '-p', f'scene_file:={scene_file}'])
+    ros.probe.advertise(String, '/robot_description', LATCHED_QOS)
+    ros.probe.publish(String, '/robot_description', String(data=PANDA_URDF.read_text()),
+                      LATCHED_QOS)
+    wait_for(lambda: [s for s in ros.probe.statuses('ftplan_planner: robot_description')
+                      if s.level == 'OK'], timeout=60.0, what='the planner to build the Panda')
+    request = GetPlan.Request(
+        start=PoseStamped(header=Header(frame_id='base_link'),
+                          pose=create_pose(X_S['position'], X_S['orientation'])),
+        goal=PoseStamped(header=Header(frame_id='base_link'),
+                         pose=create_pose(X_G['position'], X_G['orientation'])))
+    response = ros.probe.call(GetPlan, '/ftplan/plan', request, timeout=60.0)
+    assert response.plan.poses
+    code, _, err = planner.interrupt()
+    assert code == 0 and 'Traceback' not in err, err

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from geometry_msgs.msg import Point, Pose, PoseStamped, Vector3
 from nav_msgs.srv import GetPlan
+from rclpy.parameter import Parameter
 from ros_support import FIG3A, SCENES, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, Header
@@ -20,7 +21,7 @@ from ftplan_msgs_py import (
     read_path,
     read_plan_markers,
 )
-from ftplan_ros.core import load_scene
+from ftplan_ros.core import InputError, load_scene
 from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.reporting import stamp_key
@@ -122,7 +123,8 @@ BAD_REQUESTS = {
                             "unknown frame 'map'"),
     'unknown goal frame': (lambda ros: request(goal=pose(1.0, 0.0, frame='odom')),
                            "unknown frame 'odom'"),
-    'NaN goal position': (lambda ros: request(goal=(float('nan'), 0.0)), 'must be finite'),
+    'NaN goal position': (lambda ros: request(goal=(float('nan'), 0.0)),
+                          'goal.pose.position has a non-finite value'),
     'NaN joint state': (_nan_joint_state, 'the latest joint state was rejected'),
     'unreachable goal': (lambda ros: request(goal=(5.0, 0.0)), "out of the arm's reach"),
     'goal off the plane': (lambda ros: request(goal=(1.0, 0.0, 0.5)), 'z = 0'),
@@ -197,3 +199,14 @@ def test_obstacles_add_to_the_scene_and_malformed_markers_keep_the_previous_ones
         markers=[Marker(action=Marker.DELETEALL)]), LATCHED_QOS)
     wait_for(lambda: ros.probe.logged('ftplan_planner', '0 obstacles from /ftplan/obstacles'))
     assert plan_ok(ros).plan.poses
+
+
+def test_a_planar_arm_refuses_a_spatial_task_kind(ros):
+    overrides = [Parameter('scene_file', value=str(FIG3A)), Parameter('task_kind', value='pose')]
+    with pytest.raises(InputError, match="task_kind: 'pose': a planar arm does planar tasks"):
+        PlannerNode(context=ros.context, parameter_overrides=overrides)
+    planner = ros.make(PlannerNode)
+    result = planner.set_parameters([Parameter('task_kind', value='axis')])[0]
+    assert not result.successful and 'a planar arm does planar tasks only' in result.reason
+    assert planner.set_parameters([Parameter('task_kind', value='planar')])[0].successful
+    assert plan_ok(ros).plan.poses[0].pose.orientation.w == 1.0   # planar: no orientation

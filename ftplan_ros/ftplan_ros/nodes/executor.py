@@ -15,6 +15,14 @@ the S_F web; the nominal path is the web path equal to the trajectory). A call o
    for the path in S_F ∩ H_i from that configuration to M_g^F and commands it;
 4. done (at the goal) or failed (with the reason).
 
+A lock of a joint the plan does not tolerate (the planner names the tolerated joints in
+its 'plan' status, plan_info.py) is handled the same way: a recovery path the core
+finds in S_F is safe and is followed; without one the arm stays stopped and the
+execution fails with "joint X is not tolerated by this plan". Arrival is judged with
+the core's task errors against the plan's goal (position [m] and, for axis and pose
+tasks, orientation [rad]). A scene file without a robot takes it from
+/robot_description (scene_source.py); until then executions are refused.
+
 An execution is refused while a joint that locked in an earlier one has not been
 declared repaired (`~/reset`, std_srvs/Trigger: the approach would command it), and when
 the current obstacles (scene and /ftplan/obstacles) touch a vertex of the plan's S_F:
@@ -37,6 +45,7 @@ from dataclasses import dataclass, replace
 from enum import StrEnum
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
@@ -47,6 +56,7 @@ from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
     create_joint_trajectory,
+    read_diagnostic_status,
     read_failure_surface,
     read_joint_state,
     read_joint_trajectory,
@@ -55,9 +65,12 @@ from ftplan_msgs_py import (
 from ftplan_ros.core import (
     FailureSurface,
     InputError,
+    Robot,
+    Scene,
     load_kernels,
     recover,
     self_motion_path,
+    task_errors,
 )
 
 from .motion import path_clearance, progress_along, straight_moves, time_path
@@ -66,13 +79,16 @@ from .params import (
     add_validators,
     check_startup_parameters,
     declare,
-    declare_scene,
     positive,
 )
+from .plan_info import PLANNER_STATUS, PlanInfos, join_names, read_plan_info
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
+from .scene_source import SceneSource
 from .spinning import run_node
+from .tasks import bind_task_kind
 from .topics import (
+    DIAGNOSTICS,
     EXECUTE_SERVICE,
     EXECUTOR_NODE,
     FAILURE_SURFACE,
@@ -81,12 +97,14 @@ from .topics import (
     LOCKED_JOINT,
     OBSTACLES,
     RESET_SERVICE,
+    ROBOT_DESCRIPTION,
     START_CONFIGURATION,
     TRAJECTORY,
 )
 
+_DIAGNOSTICS_DEPTH = 50
 COLLISION_CHECK_STEP = 0.01  # [rad] between the clearance samples of an approach move
-ON_MANIFOLD_TOLERANCE = 1e-6  # [m] the end effector counts as at x_s within this
+ON_MANIFOLD_TOLERANCE = 1e-6  # [m, rad] the end effector counts as at x_s within this
 
 
 class State(StrEnum):
@@ -129,7 +147,8 @@ class Execution:
     recovery_length: float | None = None
     stop_requested: float | None = None
     finished: float | None = None
-    goal_error: float | None = None
+    goal_error: float | None = None              # [m]
+    goal_orientation_error: float | None = None  # [rad]
     reason: str = ''
     approach: str = ''
     requested_ns: int = 0            # ROS time [ns] of the request; older joint states are stale
@@ -145,7 +164,30 @@ class ExecutorNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(EXECUTOR_NODE, **kwargs)
-        self.scene = declare_scene(self)
+        self.diagnostics = Diagnostics(self)
+        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+        self._declare_parameters()
+        self.scene: Scene | None = None
+        self.names: list[str] = []
+        self.state = State.IDLE
+        self.plan: HeldPlan | None = None
+        self.plan_infos = PlanInfos()
+        self.execution: Execution | None = None
+        self.executions = 0
+        self.locked_joints: set[int] = set()  # locked in an execution, not yet repaired
+        self.q: np.ndarray | None = None
+        self._previous_q: np.ndarray | None = None
+        self._obstacles = ObstacleSet(None)
+        self._start_msg: JointState | None = None
+        self._trajectory_msg: JointTrajectory | None = None
+        self._surface_msg: Float64MultiArray | None = None
+        self._last_status = 0.0
+        if self.source.scene is not None:
+            self._use_scene(self.source.scene)
+        self._create_interfaces()
+        self.report_status('waiting for a plan')
+
+    def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,
                 'Fastest joint speed [rad/s] of the commanded trajectories.')
         declare(self, 'arrival_tolerance', 1e-6,
@@ -166,29 +208,16 @@ class ExecutorNode(Node):
         declare(self, 'status_rate', 10.0,
                 'Rate [Hz] of the progress reports on /diagnostics while executing (1 Hz when '
                 'idle).', read_only=True)
+        declare(self, 'planner_status', PLANNER_STATUS,
+                'Name of the planner\'s plan status on /diagnostics (task, tolerances and '
+                'tolerated joints of each plan).')
         validators = {name: positive for name in (
             'max_joint_speed', 'arrival_tolerance', 'max_path_offset', 'path_tolerance',
             'stopped_tolerance', 'stop_timeout', 'start_timeout', 'status_rate')}
         check_startup_parameters(self, validators)
         add_validators(self, validators)
 
-        robot = self.scene.robot
-        self.names = list(robot.joint_names)
-        load_kernels(robot)  # approaches along M_s trace with it
-        self.diagnostics = Diagnostics(self)
-        self.state = State.IDLE
-        self.plan: HeldPlan | None = None
-        self.execution: Execution | None = None
-        self.executions = 0
-        self.locked_joints: set[int] = set()  # locked in an execution, not yet repaired
-        self.q: np.ndarray | None = None
-        self._previous_q: np.ndarray | None = None
-        self._obstacles = ObstacleSet(self.scene)
-        self._start_msg: JointState | None = None
-        self._trajectory_msg: JointTrajectory | None = None
-        self._surface_msg: Float64MultiArray | None = None
-        self._last_status = 0.0
-
+    def _create_interfaces(self) -> None:
         self.command_publisher = self.create_publisher(
             JointTrajectory, JOINT_COMMAND, EVENT_QOS_DEPTH)
         self.joint_state_subscription = self.create_subscription(
@@ -203,12 +232,53 @@ class ExecutorNode(Node):
             JointTrajectory, TRAJECTORY, self.trajectory_callback, LATCHED_QOS)
         self.surface_subscription = self.create_subscription(
             Float64MultiArray, FAILURE_SURFACE, self.failure_surface_callback, LATCHED_QOS)
+        self.diagnostics_subscription = self.create_subscription(
+            DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, _DIAGNOSTICS_DEPTH)
         self.execute_service = self.create_service(
             Trigger, EXECUTE_SERVICE, self.execute_callback)
         self.reset_service = self.create_service(Trigger, RESET_SERVICE, self.reset_callback)
         rate = float(self.get_parameter('status_rate').value)
         self.status_timer = self.create_timer(1.0 / rate, self.status_callback)
-        self.report_status('waiting for a plan')
+
+    # The robot ----------------------------------------------------------------------
+
+    def _use_scene(self, scene: Scene) -> None:
+        """Execute with `scene`'s robot from now on; a plan for other joints is dropped."""
+        load_kernels(scene.robot)  # approaches along M_s trace with it
+        problems = self._obstacles.rebase(scene)
+        names = list(scene.robot.joint_names)
+        if names != self.names:  # another arm: nothing of the old one applies
+            self.plan = self.execution = None
+            self.locked_joints.clear()
+            self.q = self._previous_q = None
+        self.scene, self.names = scene, names
+        for problem in problems:
+            self.diagnostics.rejected('input', f'ignored obstacle markers: {problem}')
+
+    def _scene_changed(self, scene: Scene) -> None:
+        """Take a new robot from /robot_description (stopping an execution under way)."""
+        if self.state in ACTIVE:
+            self._stop()
+            self._fail(f'{ROBOT_DESCRIPTION} changed during the execution: stopped')
+        self._use_scene(scene)
+        self._assemble_plan()
+        self.report_status(f'robot from {ROBOT_DESCRIPTION}: {len(self.names)} joints', log=True)
+
+    def _plan_robot(self, plan: HeldPlan) -> Robot:
+        """Return the robot bound to the plan's task kind (the scene's when unknown)."""
+        info = self.plan_infos.get(plan.key)
+        robot = self.scene.robot
+        if info is None:
+            return robot
+        try:
+            return bind_task_kind(robot, info.task_kind)
+        except InputError:
+            return robot
+
+    def _tolerated(self, plan: HeldPlan) -> tuple[str, ...] | None:
+        """Return the joints the plan tolerates (None: its plan status did not arrive)."""
+        info = self.plan_infos.get(plan.key)
+        return None if info is None else info.tolerated_joints
 
     # The plan -----------------------------------------------------------------------
 
@@ -230,7 +300,7 @@ class ExecutorNode(Node):
     def _assemble_plan(self) -> None:
         """Hold a new plan once θ_s, trajectory and S_F of one plan have all arrived."""
         start, trajectory, surface = self._start_msg, self._trajectory_msg, self._surface_msg
-        if start is None or trajectory is None or surface is None:
+        if start is None or trajectory is None or surface is None or self.scene is None:
             return
         key = stamp_key(start.header.stamp)
         if stamp_key(trajectory.header.stamp) != key:
@@ -249,10 +319,24 @@ class ExecutorNode(Node):
         matches = np.flatnonzero(np.all(paths == nominal[None], axis=(1, 2)))
         if len(matches) == 0 or not np.array_equal(nominal[0], theta_s):
             return
-        self.plan = HeldPlan(key, theta_s, FailureSurface(paths, int(matches[0]), ()))
+        self.plan = HeldPlan(key, theta_s, FailureSurface(paths, int(matches[0]), (), ()))
         self.get_logger().info(f'holding plan {key}: {len(nominal)} waypoints, S_F of '
                                f'{paths.shape[0]} paths')
         self.report_status(f'holding plan {key}')
+
+    def diagnostics_callback(self, msg: DiagnosticArray) -> None:
+        """Keep what the planner's plan statuses say about each plan (plan_info.py)."""
+        name = self.get_parameter('planner_status').value
+        for status in msg.status:
+            if status.name != name:
+                continue
+            try:
+                reading = read_diagnostic_status(status)
+            except ValueError:
+                continue
+            info = read_plan_info(reading.values) if reading.level == 'OK' else None
+            if info is not None:
+                self.plan_infos.add(info)
 
     def obstacles_callback(self, msg: MarkerArray) -> None:
         """Keep the obstacle topic, for checking approach moves and the held plan's S_F."""
@@ -294,13 +378,16 @@ class ExecutorNode(Node):
     def _start_execution(self) -> tuple[bool, str]:
         if self.state in ACTIVE:
             return False, f'execution {self.execution.number} is still {self.state.value}'
+        if self.scene is None:
+            return False, self.source.waiting
         if self.plan is None:
             return False, 'no plan yet: call the plan service (/ftplan/plan) first'
         if self.locked_joints:
             locked = [self.names[j] for j in sorted(self.locked_joints)]
             return False, (f'{locked} locked in execution {self.execution.number} and would be '
                            f'commanded: call {self.get_name()}/reset once repaired')
-        if self._obstacles.checker.min_clearance(self.plan.surface.vertices).min() <= 0.0:
+        if self._obstacles.checker.min_clearance(self.plan.surface.vertices,
+                                                 needed=0.0).min() <= 0.0:
             return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
                            'surface now meets one; plan again')
         self.executions += 1
@@ -338,15 +425,17 @@ class ExecutorNode(Node):
     def _approach(self, q: np.ndarray, theta_s: np.ndarray) -> tuple[np.ndarray | None, str]:
         """Find a collision-free path (k, n) from q to θ_s plus whole turns; say how it goes.
 
-        A single point (1, n) means the arm is at θ_s already.
+        A single point (1, n) means the arm is at θ_s already. Along M_s only with one
+        degree of redundancy (M_s is then a curve).
         """
-        robot = self.scene.robot
+        robot = self._plan_robot(self.execution.plan)
         moves = straight_moves(q, theta_s, robot.periodic)
         if np.max(np.abs(moves[0][-1] - q)) <= \
                 float(self.get_parameter('arrival_tolerance').value):
             return moves[0][-1:].copy(), 'already at theta_s'
         x_s = robot.forward_kinematics(theta_s)
-        if np.linalg.norm(robot.forward_kinematics(q) - x_s) <= ON_MANIFOLD_TOLERANCE:
+        if robot.n_joints - robot.task_dim == 1 and \
+                np.all(task_errors(robot, x_s, q) <= ON_MANIFOLD_TOLERANCE):
             path = self_motion_path(robot, x_s, q, theta_s)
             if path is not None and \
                     path_clearance(self._obstacles.checker, path, COLLISION_CHECK_STEP) > 0.0:
@@ -381,7 +470,13 @@ class ExecutorNode(Node):
         self._set_state(State.FAILED, reason, level='ERROR')
 
     def joint_state_callback(self, msg: JointState) -> None:
-        """Track the arm and move the execution on from phase to phase."""
+        """Track the arm and move the execution on from phase to phase.
+
+        Messages that name none of the arm's joints (a gripper's, another arm's) are not
+        the arm's; extra joints in the arm's message (fingers) are ignored.
+        """
+        if not self.names or not set(msg.name) & set(self.names):
+            return
         try:
             q = read_joint_state(msg, self.names)
         except ValueError as error:
@@ -423,13 +518,19 @@ class ExecutorNode(Node):
             self._finish(q)
 
     def _finish(self, q: np.ndarray) -> None:
+        """Done: report the task errors [m, rad] from the plan's goal (its end, if unknown)."""
         ex = self.execution
-        robot = self.scene.robot
+        robot = self._plan_robot(ex.plan)
+        info = self.plan_infos.get(ex.plan.key)
+        goal = info.goal if info is not None and len(info.goal) == len(
+            robot.forward_kinematics(q)) else robot.forward_kinematics(ex.nominal[-1])
         ex.finished = time.monotonic()
-        ex.goal_error = float(np.linalg.norm(
-            robot.forward_kinematics(q) - robot.forward_kinematics(ex.nominal[-1])))
+        ex.goal_error, ex.goal_orientation_error = (
+            float(v) for v in task_errors(robot, goal, q))
         how = 'recovered' if ex.locked_joint is not None else 'nominal path'
-        self._set_state(State.DONE, f'reached the goal ({how}), error {ex.goal_error:.2e} m')
+        error = f'{ex.goal_error:.2e} m' + (f', {ex.goal_orientation_error:.2e} rad' if
+                                            robot.task_kind in ('axis', 'pose') else '')
+        self._set_state(State.DONE, f'reached the goal ({how}), error {error}')
 
     def locked_joint_callback(self, msg: JointState) -> None:
         """Handle a failure: during the nominal phase, stop and prepare the recovery."""
@@ -437,6 +538,10 @@ class ExecutorNode(Node):
             event = read_locked_joint(msg)
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored locked-joint event: {error}')
+            return
+        if self.scene is None:
+            self.diagnostics.rejected('input', f'ignored lock of {event.name}: '
+                                      f'{self.source.waiting}', {'joint': event.name})
             return
         if event.name not in self.names:
             self.diagnostics.rejected('input', f'ignored lock of unknown joint {event.name!r}; '
@@ -481,22 +586,44 @@ class ExecutorNode(Node):
         ex.lock_progress, _ = progress_along(ex.nominal, q)
         ex.progress = ex.lock_progress
         ex.lock_configuration = q.copy()
+        name = self.names[joint]
+        tolerated = self._tolerated(ex.plan)
+        untolerated = tolerated is not None and name not in tolerated
+        problem = ''
         try:
             rescue = recover(ex.surface, q, joint,
                              float(self.get_parameter('max_path_offset').value))
         except InputError as error:
-            self._fail(f'cannot recover from {self.names[joint]} locked at {format_vector(q)}: '
-                       f'{error}')
-            return
+            rescue, problem = None, str(error)
         if rescue is None:
-            self._fail(f'S_F holds no recovery path for {self.names[joint]} locked at '
-                       f'{ex.lock_progress:.1%}: the plan\'s guarantee is broken, please report')
+            self._stop()  # the arm stands still: keep it so
+            self._fail(self._no_recovery(name, tolerated, untolerated, problem))
             return
         ex.recovery_length = rescue.length
         self._command(rescue.path)
-        self._set_state(State.RECOVERING, f'{self.names[joint]} locked at '
-                        f'{ex.lock_progress:.1%} of the nominal path: following the recovery '
-                        f'path ({len(rescue.path)} points, {rescue.length:.3f} rad)')
+        note = ' (not tolerated by this plan, but S_F holds a recovery path)' if untolerated \
+            else ''
+        self._set_state(State.RECOVERING, f'{name} locked at {ex.lock_progress:.1%} of the '
+                        f'nominal path{note}: following the recovery path ({len(rescue.path)} '
+                        f'points, {rescue.length:.3f} rad)')
+
+    def _no_recovery(self, name: str, tolerated: tuple[str, ...] | None, untolerated: bool,
+                     problem: str) -> str:
+        """Say why there is no recovery path for the lock of joint `name`."""
+        progress = f'{self.execution.lock_progress:.1%} of the nominal path'
+        where = f'locked at {progress}'
+        if untolerated:
+            return (f'joint {name} is not tolerated by this plan (it tolerates '
+                    f'{", ".join(tolerated)}): S_F holds no recovery path from where it '
+                    f'locked, at {progress}; the arm is stopped there')
+        if problem:
+            return f'cannot recover from {name} {where}: {problem}; the arm is stopped there'
+        if tolerated is None:
+            return (f'S_F holds no recovery path for {name} {where}: the plan may not tolerate '
+                    'it (its plan status, which names the tolerated joints, did not arrive); '
+                    'the arm is stopped there')
+        return (f'S_F holds no recovery path for {name} {where}: the plan\'s guarantee is '
+                'broken, please report')
 
     # Status -------------------------------------------------------------------------
 
@@ -539,14 +666,20 @@ class ExecutorNode(Node):
                               recovery_length_rad=ex.recovery_length)
             if ex.finished is not None:
                 values['duration_s'] = ex.finished - ex.started
-                if ex.lock_received is not None:
-                    values['recovery_time_s'] = ex.finished - ex.lock_received
+                if ex.lock_received is not None and self.state == State.DONE:
+                    values['recovery_time_s'] = ex.finished - ex.lock_received  # to the goal
             if ex.goal_error is not None:
-                values['goal_error_m'] = ex.goal_error
+                values.update(goal_error_m=ex.goal_error,
+                              goal_orientation_error_rad=ex.goal_orientation_error)
             if ex.reason:
                 values['reason'] = ex.reason
         if self.locked_joints:
-            values['locked_joints'] = ','.join(self.names[j] for j in sorted(self.locked_joints))
+            values['locked_joints'] = join_names([self.names[j]
+                                                  for j in sorted(self.locked_joints)])
+        plan = ex.plan if ex is not None else self.plan
+        tolerated = None if plan is None else self._tolerated(plan)
+        if tolerated is not None:
+            values['tolerated_joints'] = join_names(tolerated)  # of the execution's plan
         self.diagnostics.report('execution', level, message, values, log=log)
 
 

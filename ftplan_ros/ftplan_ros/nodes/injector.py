@@ -12,8 +12,15 @@ gets at most one drill, taken in order from:
   execution started (which may fall in the approach to θ_s, where no recovery is
   guaranteed).
 - `random_drills`: then this many executions (-1: all of them) get a Monte Carlo drill,
-  a uniformly random joint at a uniformly random fraction of the nominal path, drawn
-  from a generator seeded with `seed` (setting either parameter restarts the sequence).
+  a uniformly random joint among those the plan tolerates (the executor's status names
+  them, plan_info.py; every joint when it does not) at a uniformly random fraction of
+  the nominal path, drawn from a generator seeded with `seed` (setting either parameter
+  restarts the sequence).
+
+Drills name joints, for any number of joints; a scheduled drill may lock a joint the
+plan does not tolerate (the executor then recovers if S_F allows it, else stops the arm
+and reports it). A scene file without a robot takes it from /robot_description
+(scene_source.py): drills are checked against its joints when it arrives.
 
 Setting `lock_now` to a joint name publishes one event at once and clears the parameter.
 Every event is logged and reported on /diagnostics ('ftplan_injector: drills').
@@ -47,11 +54,12 @@ from .params import (
     check_startup_parameters,
     declare,
     declare_array,
-    declare_scene,
     non_negative,
 )
+from .plan_info import split_names
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
 from .reporting import Diagnostics
+from .scene_source import SceneSource
 from .spinning import run_node
 from .topics import (
     DIAGNOSTICS,
@@ -79,14 +87,17 @@ class Drill:
             f'{self.joint}@{self.fraction:.3g}'
 
 
-def parse_drill(text: str, joint_names: Sequence[str]) -> Drill:
-    """Parse 'JOINT@FRACTION' (0..1) or 'JOINT@SECONDSs'; ValueError says what is wrong."""
+def parse_drill(text: str, joint_names: Sequence[str] | None) -> Drill:
+    """Parse 'JOINT@FRACTION' (0..1) or 'JOINT@SECONDSs'; ValueError says what is wrong.
+
+    With `joint_names` None (the robot is not known yet) any joint name passes.
+    """
     match = _DRILL.match(text) if isinstance(text, str) else None
     if match is None:
         raise ValueError(f'drill {text!r} is not JOINT@FRACTION (e.g. joint2@0.4) or '
                          'JOINT@SECONDSs (e.g. joint1@2.5s)')
     joint, number, seconds = match.group(1), float(match.group(2)), match.group(3)
-    if joint not in joint_names:
+    if joint_names is not None and joint not in joint_names:
         raise ValueError(f'drill {text!r}: unknown joint {joint!r}; the arm has '
                          f'{list(joint_names)}')
     if seconds:
@@ -98,7 +109,10 @@ def parse_drill(text: str, joint_names: Sequence[str]) -> Drill:
 
 
 def random_drill(rng: np.random.Generator, joint_names: Sequence[str]) -> Drill:
-    """Draw a Monte Carlo drill: a uniformly random joint at a uniformly random fraction."""
+    """Draw a Monte Carlo drill: a random joint of `joint_names` at a random fraction.
+
+    Both are uniform; the fraction is of the nominal path's length.
+    """
     joint = joint_names[int(rng.integers(len(joint_names)))]
     return Drill(joint, fraction=float(rng.uniform(0.0, 1.0)))
 
@@ -108,8 +122,10 @@ class InjectorNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(INJECTOR_NODE, **kwargs)
-        self.scene = declare_scene(self)
-        self.names = list(self.scene.robot.joint_names)
+        self.diagnostics = Diagnostics(self)
+        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+        self.scene = self.source.scene
+        self.names = None if self.scene is None else list(self.scene.robot.joint_names)
         declare_array(self, 'drills', Parameter.Type.STRING_ARRAY,
                       'Scheduled drills, one per execution: JOINT@FRACTION of the nominal '
                       'path (0..1) or JOINT@SECONDSs after the execution starts.')
@@ -124,14 +140,12 @@ class InjectorNode(Node):
             'drills': self._check_drills,
             'random_drills': lambda v: None if v >= -1 else f'must be >= -1, got {v}',
             'seed': non_negative,
-            'lock_now': lambda v: None if v in ('', *self.names) else
-            f'unknown joint {v!r}; the arm has {self.names}',
+            'lock_now': self._check_lock_now,
         }
         check_startup_parameters(self, validators)
         add_validators(self, validators)
         self.add_post_set_parameters_callback(self.parameters_callback)
 
-        self.diagnostics = Diagnostics(self)
         self.queue = [parse_drill(text, self.names) for text in array_parameter(self, 'drills')]
         self._restart_random()
         self.execution: int | None = None
@@ -139,6 +153,8 @@ class InjectorNode(Node):
         self.drill: Drill | None = None
         self.pending = False
         self.nominal: np.ndarray | None = None
+        self.tolerated: tuple[str, ...] = ()  # of the execution's plan, from its status
+        self._trajectory_msg: JointTrajectory | None = None
         self._drill_timer = None
         self._lock_now_clearer = self.create_timer(0.0, self._clear_lock_now)
         self._lock_now_clearer.cancel()
@@ -155,6 +171,25 @@ class InjectorNode(Node):
                                    f'{self.random_left} random (seed {self._seed})')
 
     # Parameters ---------------------------------------------------------------------
+
+    def _check_lock_now(self, value) -> str | None:
+        if value == '' or self.names is None or value in self.names:  # None: robot to come
+            return None
+        return f'unknown joint {value!r}; the arm has {self.names}'
+
+    def _scene_changed(self, scene) -> None:
+        """Take the joints of a robot from /robot_description; drop drills of others."""
+        self.scene = scene
+        self.names = list(scene.robot.joint_names)
+        kept = [drill for drill in self.queue if drill.joint in self.names]
+        for drill in self.queue:
+            if drill.joint not in self.names:
+                self.diagnostics.report('drills', 'WARN', f'dropped drill {drill}: unknown '
+                                        f'joint {drill.joint!r}; the arm has {self.names}',
+                                        {'drill': str(drill)}, log=True)
+        self.queue = kept
+        if self._trajectory_msg is not None:
+            self.trajectory_callback(self._trajectory_msg)
 
     def _check_drills(self, value) -> str | None:
         try:
@@ -190,6 +225,9 @@ class InjectorNode(Node):
 
     def trajectory_callback(self, msg: JointTrajectory) -> None:
         """Keep the nominal path, to measure the progress of an execution."""
+        self._trajectory_msg = msg
+        if self.names is None:
+            return
         try:
             self.nominal = read_joint_trajectory(msg, self.names).positions
         except ValueError as error:
@@ -207,11 +245,12 @@ class InjectorNode(Node):
                 execution = int(values['execution']) if 'execution' in values else None
             except (ValueError, KeyError):
                 continue
-            self._follow(execution, state)
+            self._follow(execution, state, split_names(values.get('tolerated_joints', '')))
 
-    def _follow(self, execution: int | None, state: str) -> None:
+    def _follow(self, execution: int | None, state: str, tolerated: tuple[str, ...]) -> None:
         if execution is not None and execution != self.execution and state in _RUNNING:
             self.execution = execution
+            self.tolerated = tolerated
             self._arm()
         if execution != self.execution:
             return
@@ -229,8 +268,9 @@ class InjectorNode(Node):
         self._disarm()
         if self.queue:
             self.drill = self.queue.pop(0)
-        elif self.random_left != 0:
-            self.drill = random_drill(self.rng, self.names)
+        elif self.random_left != 0 and self.names is not None:
+            joints = [name for name in self.names if name in self.tolerated] or self.names
+            self.drill = random_drill(self.rng, joints)
             self.random_left -= 1 if self.random_left > 0 else 0
         else:
             self.drill = None
@@ -262,7 +302,7 @@ class InjectorNode(Node):
     def joint_state_callback(self, msg: JointState) -> None:
         """Fire a fraction drill once the arm has done its share of the nominal path."""
         if not self.pending or self.state != 'nominal' or self.drill.fraction is None or \
-                self.nominal is None:
+                self.nominal is None or self.names is None:
             return
         try:
             q = read_joint_state(msg, self.names)

@@ -19,6 +19,7 @@ from ftplan_ros.core import CollisionChecker, Obstacle, Scene
 
 # Fixed-axis x, y, z ('xyz' in scipy, lower case: extrinsic): R = Rz Ry Rx, as in URDF.
 _RPY_AXES = 'xyz'
+_MAX_WAITING = 100  # marker arrays kept until there is a robot
 
 
 def rpy_from_quaternion(q: np.ndarray) -> tuple[float, float, float]:
@@ -59,27 +60,63 @@ class ObstacleSet:
     """The obstacles received on /ftplan/obstacles, keyed (ns, id) as RViz keys markers.
 
     They add to the static obstacles of a base scene; `checker` checks against both.
+    Without a base scene yet (a robot to come from /robot_description) the marker arrays
+    wait, in order, and are applied when `rebase` gives one.
     """
 
-    def __init__(self, base: Scene):
+    def __init__(self, base: Scene | None):
         self.base = base
-        self.frame_id = base.frame_id
         self.shapes: Mapping[ObstacleKey, ObstacleShape] = {}
         self.obstacles: tuple[Obstacle, ...] = ()
-        self.checker = CollisionChecker(base.robot, base.obstacles)
+        self.checker = None if base is None else CollisionChecker(base.robot, base.obstacles)
+        self._waiting: list[MarkerArray] = []
+
+    @property
+    def frame_id(self) -> str | None:
+        """The base frame the markers must be in (None before there is a base scene)."""
+        return None if self.base is None else self.base.frame_id
 
     def update(self, msg: MarkerArray) -> None:
         """Apply a MarkerArray (ADD, DELETE, DELETEALL); all or nothing.
 
         :raises ValueError: on a malformed marker; the set is then left as it was.
         """
-        shapes = read_obstacle_markers(msg, self.frame_id, self.shapes)
-        obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
-        self.shapes, self.obstacles = shapes, obstacles
+        if self.base is None:
+            self._waiting = self._waiting[-(_MAX_WAITING - 1):] + [msg]
+            return
+        self._apply(msg)
         self.checker = CollisionChecker(self.base.robot, self.scene().obstacles)
 
-    def scene(self) -> Scene:
+    def _apply(self, msg: MarkerArray) -> None:
+        shapes = read_obstacle_markers(msg, self.base.frame_id, self.shapes)
+        obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
+        self.shapes, self.obstacles = shapes, obstacles
+
+    def rebase(self, base: Scene) -> list[str]:
+        """Add the obstacles to a new base scene (a new robot).
+
+        Returns the problems of the marker arrays that waited for it (left out).
+        """
+        self.base = base
+        waiting, self._waiting = self._waiting, []
+        problems = []
+        for msg in waiting:
+            try:
+                self._apply(msg)
+            except ValueError as error:
+                problems.append(str(error))
+        self.checker = CollisionChecker(base.robot, self.scene().obstacles)
+        return problems
+
+    @property
+    def pending(self) -> int:
+        """Marker arrays waiting for a base scene."""
+        return len(self._waiting)
+
+    def scene(self) -> Scene | None:
         """Return the base scene with these obstacles added to its static ones."""
+        if self.base is None:
+            return None
         return self.base.with_obstacles(self.obstacles) if self.obstacles else self.base
 
     def __len__(self) -> int:

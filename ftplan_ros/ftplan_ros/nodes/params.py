@@ -1,8 +1,9 @@
-"""Parameter helpers shared by the nodes: declaration with descriptors, scene loading.
+"""Parameter helpers shared by the nodes: declaration with descriptors and validators.
 
-Every node takes `scene_file`, the path of a scene YAML (robot, static obstacles, task).
-Its default is the installed fig3a scene (found through the ament index), or the
-repository's config/scenes/fig3a.yaml when the package is not installed.
+Every node takes `scene_file`, the path of a scene YAML (robot, static obstacles, task;
+scene_source.py loads it). Its default is the installed fig3a scene (found through the
+ament index), or the repository's config/scenes/fig3a.yaml when the package is not
+installed.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from ftplan_ros.core import InputError, Scene, load_scene
+from ftplan_ros.core import InputError
 
 PACKAGE = 'ftplan_ros'
 DEFAULT_SCENE = 'fig3a.yaml'
@@ -119,18 +120,3 @@ def check_startup_parameters(node: Node, validators: dict[str, Validator]) -> No
         problem = validator(parameter.value)
         if problem:
             raise InputError(name, problem)
-
-
-def declare_scene(node: Node) -> Scene:
-    """Declare `scene_file` (read-only) and load it; InputError names the problem."""
-    path = declare(node, 'scene_file', default_scene_file(),
-                   'Scene YAML: robot, static obstacles and task (obstacles from '
-                   '/ftplan/obstacles add to the static ones).', read_only=True)
-    if not path:
-        raise InputError('scene_file', 'is empty; give the path of a scene YAML')
-    scene = load_scene(path)
-    node.get_logger().info(
-        f'scene {scene.name} from {path}: {scene.robot.n_joints} joints '
-        f'{list(scene.robot.joint_names)}, {len(scene.obstacles)} static obstacles, '
-        f'frame {scene.frame_id!r}')
-    return scene

@@ -2,19 +2,31 @@
 
     ros2 run ftplan_ros planner --ros-args -p scene_file:=fig3a.yaml
 
-A request asks for a motion of the end effector from `start` to `goal` in the scene's
-base frame. An empty `start.header.frame_id` means "from where the arm is now": x_s is
-the forward kinematics of the latest /joint_states. An empty `goal.header.frame_id`
-means the scene's task goal. `tolerance` > 0 overrides the goal tolerance [m].
+A request asks for a motion of the end effector from `start` to `goal`, poses in the
+scene's base frame. What part of a pose is the task comes from the `task_kind`
+parameter ('' = the scene's task kind, else 'pose' for a spatial arm): `position` (x,
+y, z), `axis` (the position and the z axis of the pose's orientation: the tool points
+along it, free to turn about it) or `pose` (position and orientation, a unit quaternion
+within 1e-3); planar arms take (x, y) with z = 0. An empty `start.header.frame_id`
+means "from where the arm is now": x_s is the forward kinematics of the latest
+/joint_states. An empty `goal.header.frame_id` means the scene's task goal.
+`tolerance` > 0 overrides the goal tolerance [m]; the `orientation_tolerance` parameter
+[rad] (0: the scene's) bounds the orientation error of axis and pose tasks, and the
+`tolerate` parameter names the joints whose lock the plan must survive (empty: the
+scene's `tolerate`, else every joint).
 
-The response Path is the end-effector path of the nominal motion; an empty Path means
-there is no failure-tolerant plan, and the reason is logged and reported on
-/diagnostics. A plan found is also published, latched, right after the response on
-/ftplan/plan/start_configuration (θ_s, stamped like the Path), /ftplan/plan/trajectory
-(the nominal joint path, timed by `max_joint_speed`, stamped likewise) and
-/ftplan/plan/failure_surface (S_F), and 50 ms later on /ftplan/plan/markers for RViz;
-match them to a response by stamp (PlanClient does). A failed request leaves the last
-good plan's topics as they were.
+The response Path holds the tool poses along the nominal motion (orientations too for
+spatial arms); an empty Path means there is no failure-tolerant plan, and the reason is
+logged and reported on /diagnostics. A plan found is also published, latched, right
+after the response on /ftplan/plan/start_configuration (θ_s, stamped like the Path),
+/ftplan/plan/trajectory (the nominal joint path, timed by `max_joint_speed`, stamped
+likewise) and /ftplan/plan/failure_surface (S_F), and 50 ms later on
+/ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does). Its
+task, tolerances and tolerated joints are values of the 'ftplan_planner: plan' status
+(plan_info.py). A failed request leaves the last good plan's topics as they were.
+
+A scene file without a robot takes it from /robot_description (scene_source.py); until
+then every request is refused with "waiting for /robot_description".
 
 Planning runs in its own callback group, so joint states and obstacles keep flowing
 while it works on a MultiThreadedExecutor.
@@ -46,32 +58,50 @@ from ftplan_msgs_py import (
     create_path,
     create_plan_markers,
     read_joint_state,
+    read_point,
+    read_quaternion,
 )
 from ftplan_ros.core import (
     InputError,
     ManifoldCache,
     PlannerOptions,
     PlanResult,
+    Robot,
     Scene,
     Task,
     VerificationOptions,
     load_kernels,
     plan,
 )
+from ftplan_ros.core.scene import (
+    DEFAULT_GOAL_TOLERANCE,
+    DEFAULT_ORIENTATION_TOLERANCE,
+    parse_tolerated,
+)
 
 from .motion import time_path
 from .obstacles import ObstacleSet, shape_from_obstacle
 from .params import (
     add_validators,
+    array_parameter,
     check_startup_parameters,
     declare,
-    declare_scene,
+    declare_array,
     non_negative,
     positive,
 )
+from .plan_info import join_names, plan_info_values
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
+from .scene_source import SceneSource
 from .spinning import run_node
+from .tasks import (
+    bind_task_kind,
+    check_task_kind,
+    convert_task_point,
+    end_effector_poses,
+    task_point,
+)
 from .topics import (
     FAILURE_SURFACE,
     JOINT_STATES,
@@ -91,12 +121,34 @@ MARKERS_DELAY = 0.05
 MARKER_WEB_SIZE = 40  # paths and waypoints of S_F drawn at most (~6000 marker points)
 
 
+class RequestError(ValueError):
+    """A request field the planner cannot use; the message names it."""
+
+
 class PlannerNode(Node):
     """Serve GetPlan with the core planner over the scene plus the obstacle topic."""
 
     def __init__(self, **kwargs):
         super().__init__(PLANNER_NODE, **kwargs)
-        self.scene = declare_scene(self)
+        self.diagnostics = Diagnostics(self)
+        self._lock = threading.Lock()
+        self.cache = ManifoldCache()
+        self.scene: Scene | None = None
+        self._obstacles = ObstacleSet(None)
+        self._joint_state: np.ndarray | None = None
+        self._joint_state_problem = 'no joint state received yet on /joint_states'
+        self._early_joint_state: JointState | None = None  # arrived before the robot
+        self._pending_results: tuple | None = None
+        self._pending_markers: tuple | None = None
+        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+        self._declare_parameters()
+        if self.source.scene is not None:
+            self._check_scene_parameters(self.source.scene)  # a bad one stops the start
+            self._use_scene(self.source.scene)
+        self._create_interfaces()
+        self.get_logger().info(f'serving {PLAN_SERVICE}')
+
+    def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,
                 'Fastest joint speed [rad/s] used to time /ftplan/plan/trajectory.')
         declare(self, 'margin', 0.0,
@@ -106,23 +158,27 @@ class PlannerNode(Node):
                 'plan (a new seed clears the cache of traced manifolds).')
         declare(self, 'joint_space_frame', DEFAULT_JOINT_SPACE_FRAME,
                 'Frame of the joint-space markers (x, y, z = joint 1, 2, 3 angles [rad]).')
+        declare(self, 'task_kind', '',
+                'What part of the request poses is the task: position, axis (position and '
+                'the pose\'s z axis) or pose; "" = the scene\'s task kind (pose without a '
+                'task). Planar arms: planar.')
+        declare(self, 'orientation_tolerance', 0.0,
+                'Orientation error [rad] allowed at the goal of axis and pose tasks (0.0: '
+                'the scene task\'s).')
+        declare_array(self, 'tolerate', Parameter.Type.STRING_ARRAY,
+                      'Joints whose lock the plan must survive (empty: the scene\'s '
+                      '`tolerate`, else every joint).')
         validators = {'max_joint_speed': positive, 'margin': non_negative,
                       'seed': non_negative,
-                      'joint_space_frame': lambda v: None if v else 'must not be empty'}
+                      'joint_space_frame': lambda v: None if v else 'must not be empty',
+                      'task_kind': self._check_task_kind,
+                      'orientation_tolerance': non_negative,
+                      'tolerate': self._check_tolerate}
         check_startup_parameters(self, validators)
         add_validators(self, validators)
         self.add_post_set_parameters_callback(self._parameters_set)
 
-        self.cache = ManifoldCache()
-        load_kernels(self.scene.robot)
-        self.diagnostics = Diagnostics(self)
-        self._lock = threading.Lock()
-        self._joint_state: np.ndarray | None = None
-        self._joint_state_problem = 'no joint state received yet on /joint_states'
-        self._obstacles = ObstacleSet(self.scene)
-        self._pending_results: tuple | None = None
-        self._pending_markers: tuple | None = None
-
+    def _create_interfaces(self) -> None:
         self.joint_state_subscription = self.create_subscription(
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
         self.obstacle_subscription = self.create_subscription(
@@ -147,24 +203,85 @@ class PlannerNode(Node):
         self.markers_timer = self.create_timer(
             MARKERS_DELAY, self.markers_callback, callback_group=results_group,
             autostart=False)
-        self.get_logger().info(f'serving {PLAN_SERVICE}')
 
-    # Inputs -------------------------------------------------------------------------
+    # The robot and the parameters ---------------------------------------------------
+
+    def _check_task_kind(self, value) -> str | None:
+        problem = check_task_kind(value)
+        if problem is None and self.scene is not None:
+            try:
+                bind_task_kind(self.scene.robot, value)
+            except InputError as error:
+                problem = error.problem
+        return problem
+
+    def _check_tolerate(self, value) -> str | None:
+        if self.scene is None:
+            return None if len(set(value)) == len(value) else 'names a joint twice'
+        try:
+            parse_tolerated(list(value) or None, self.scene.robot.joint_names)
+        except InputError as error:
+            return str(error)
+        return None
+
+    def _check_scene_parameters(self, scene: Scene) -> None:
+        """Raise InputError when task_kind or tolerate do not fit the scene's robot."""
+        bind_task_kind(scene.robot, self.get_parameter('task_kind').value)
+        parse_tolerated(array_parameter(self, 'tolerate') or None, scene.robot.joint_names)
+
+    def _task_robot(self, scene: Scene) -> Robot:
+        """Return the scene's robot bound to the requests' task kind (InputError if it cannot)."""
+        return bind_task_kind(scene.robot, self.get_parameter('task_kind').value)
+
+    def _use_scene(self, scene: Scene) -> None:
+        """Plan with `scene` from now on (its robot is new: forget the old joint state)."""
+        try:
+            load_kernels(self._task_robot(scene))
+        except InputError:
+            load_kernels(scene.robot)
+        with self._lock:
+            problems = self._obstacles.rebase(scene)
+            self.scene = scene
+            self.cache = ManifoldCache()
+            self._joint_state = None
+            early, self._early_joint_state = self._early_joint_state, None
+        for problem in problems:
+            self.diagnostics.rejected('obstacles', f'ignored obstacle markers: {problem}')
+        if early is not None:
+            self.joint_state_callback(early)
+
+    def _scene_changed(self, scene: Scene) -> None:
+        """Take a robot from /robot_description: check the parameters against it, use it."""
+        try:
+            self._check_scene_parameters(scene)
+        except InputError as error:
+            self.diagnostics.report('parameters', 'ERROR', f'parameter {error} for the robot '
+                                    'from /robot_description; plan requests will fail until '
+                                    'it is fixed', log=True)
+        self._use_scene(scene)
 
     def _parameters_set(self, parameters: list[Parameter]) -> None:
         """Start a new cache on a new seed: the cached manifolds were traced with the old one."""
         if any(p.name == 'seed' for p in parameters):
             self.cache = ManifoldCache()
 
+    # Inputs -------------------------------------------------------------------------
+
     def joint_state_callback(self, msg: JointState) -> None:
         """Keep the latest joint configuration; a bad one makes the start unknown.
 
-        Messages that name none of the arm's joints (a gripper's, say) are not the arm's.
+        Messages that name none of the arm's joints (a gripper's, another arm's) are not
+        the arm's; extra joints in the arm's message (fingers) are ignored.
         """
-        if not set(msg.name) & set(self.scene.robot.joint_names):
+        scene = self.scene
+        if scene is None:
+            self._early_joint_state = msg  # read once the robot is known
+            return
+        names = scene.robot.joint_names
+        if not set(msg.name) & set(names):
             return
         try:
-            q = read_joint_state(msg, self.scene.robot.joint_names)
+            q = read_joint_state(msg, names)
         except ValueError as error:
             with self._lock:
                 was_good = self._joint_state is not None
@@ -195,8 +312,12 @@ class PlannerNode(Node):
             else:
                 kept = len(self._obstacles)
                 error_seen = False
+            waiting = self._obstacles.pending
         if error_seen:
             self.diagnostics.rejected('obstacles', problem, {'obstacles': kept})
+        elif waiting:
+            self.diagnostics.report('obstacles', 'OK', f'{waiting} obstacle marker arrays '
+                                    'wait for the robot', {'obstacles': kept}, log=True)
         else:
             self.diagnostics.report('obstacles', 'OK', f'{kept} obstacles from {OBSTACLES}',
                                     {'obstacles': kept}, log=True)
@@ -207,19 +328,21 @@ class PlannerNode(Node):
                       ) -> GetPlan.Response:
         """Plan from request.start to request.goal; an empty Path says there is no plan."""
         stamp = self.get_clock().now().to_msg()
-        frame = self.scene.frame_id
-        response.plan = Path(header=Header(stamp=stamp, frame_id=frame))
+        scene = self.scene
+        response.plan = Path(header=Header(stamp=stamp,
+                                           frame_id=scene.frame_id if scene else ''))
         values: dict[str, object] = {'stamp': stamp_key(stamp)}
         try:
             scene = self._request_scene(request)
             task = scene.task
-            values.update(start=format_vector(task.start), goal=format_vector(task.goal),
-                          tolerance=task.goal_tolerance, obstacles=len(scene.obstacles))
+            values.update(plan_info_values(task, [scene.robot.joint_names[i]
+                                                  for i in scene.tolerated_joints]),
+                          obstacles=len(scene.obstacles))
             options = PlannerOptions(verification=VerificationOptions(
                 margin=float(self.get_parameter('margin').value)))
             rng = np.random.default_rng(int(self.get_parameter('seed').value))
             result = plan(scene, options, rng, cache=self.cache)
-        except InputError as error:
+        except (InputError, RequestError) as error:
             self._report_failure(f'bad plan request: {error}', values)
             return response
         except Exception as error:  # noqa: BLE001 - a callback must never raise
@@ -230,52 +353,76 @@ class PlannerNode(Node):
         if not result.feasible:
             self._report_failure(f'no failure-tolerant plan: {result.reason}', values)
             return response
+        values['tolerated_joints'] = join_names(result.stats.get('tolerated_joints', []) or [
+            scene.robot.joint_names[i] for i in result.tolerated_joints])
         response.plan = self._publish_plan(scene, result, stamp, values)
         return response
 
     def _request_scene(self, request: GetPlan.Request) -> Scene:
         """Build the scene (static + topic obstacles) with the request's task, or raise."""
-        robot = self.scene.robot
         with self._lock:
             q = self._joint_state
             joint_state_problem = self._joint_state_problem
             scene = self._obstacles.scene()
+        if scene is None:
+            raise InputError('robot', self.source.waiting)
+        robot = self._task_robot(scene)
+        kind = robot.task_kind
         if request.start.header.frame_id == '':
             if q is None:
                 raise InputError('start', f'empty frame_id asks for the current position, but '
                                  f'{joint_state_problem}')
             x_s = robot.forward_kinematics(q)
         else:
-            x_s = self._position(request.start, 'start')
+            x_s = self._task_point(scene, request.start, 'start', kind)
         if request.goal.header.frame_id == '':
-            if self.scene.task is None:
-                raise InputError('goal.header.frame_id', f'is empty and scene {self.scene.name} '
-                                 f'has no task goal; give the goal in {self.scene.frame_id!r}')
-            x_g = np.asarray(self.scene.task.goal, dtype=float)
+            x_g = self._scene_goal(scene, kind)
         else:
-            x_g = self._position(request.goal, 'goal')
+            x_g = self._task_point(scene, request.goal, 'goal', kind)
         tolerance = float(request.tolerance)
         if not np.isfinite(tolerance) or tolerance < 0.0:
             raise InputError('tolerance', f'must be >= 0 [m] (0: the scene\'s), got {tolerance}')
         if tolerance == 0.0:
-            tolerance = self.scene.task.goal_tolerance if self.scene.task else 0.01
-        return scene.with_task(Task(tuple(x_s.tolist()), tuple(x_g.tolist()), tolerance))
+            tolerance = scene.task.goal_tolerance if scene.task else DEFAULT_GOAL_TOLERANCE
+        angle = float(self.get_parameter('orientation_tolerance').value)
+        if angle == 0.0:
+            angle = scene.task.orientation_tolerance if scene.task else \
+                DEFAULT_ORIENTATION_TOLERANCE
+        tolerate = array_parameter(self, 'tolerate') or scene.tolerate
+        tolerated = parse_tolerated(None if tolerate is None else list(tolerate),
+                                    robot.joint_names)
+        task = Task(tuple(x_s.tolist()), tuple(x_g.tolist()), tolerance, angle)
+        return scene.with_task(task).with_tolerated(tolerated)
 
-    def _position(self, pose: PoseStamped, field: str) -> np.ndarray:
-        """Return the (m,) task position [m] of a pose in the base frame, or raise."""
-        if pose.header.frame_id != self.scene.frame_id:
+    def _scene_goal(self, scene: Scene, kind: str) -> np.ndarray:
+        """Return the scene's task goal as a task point of `kind`, or raise InputError."""
+        if scene.task is None:
+            raise InputError('goal.header.frame_id', f'is empty and scene {scene.name} '
+                             f'has no task goal; give the goal in {scene.frame_id!r}')
+        goal = convert_task_point(scene.task.goal, kind)
+        if goal is None:
+            raise InputError('goal.header.frame_id', f'is empty, but the {scene.task.kind} '
+                             f'goal of scene {scene.name} is no {kind} goal (task_kind); give '
+                             f'the goal pose in {scene.frame_id!r}')
+        return goal
+
+    def _task_point(self, scene: Scene, pose: PoseStamped, field: str, kind: str,
+                    ) -> np.ndarray:
+        """Return the task point of `kind` of a pose in the base frame, or raise."""
+        if pose.header.frame_id != scene.frame_id:
             raise InputError(f'{field}.header.frame_id',
                              f'unknown frame {pose.header.frame_id!r}: poses must be in the '
-                             f'base frame {self.scene.frame_id!r} (no tf lookups here)')
-        p = pose.pose.position
-        xyz = np.array([p.x, p.y, p.z])
-        if not np.all(np.isfinite(xyz)):
-            raise InputError(f'{field}.pose.position', f'must be finite, got {xyz.tolist()}')
-        m = self.scene.robot.task_dim
-        if m == 2 and abs(xyz[2]) > _PLANAR_Z_TOLERANCE:
+                             f'base frame {scene.frame_id!r} (no tf lookups here)')
+        try:
+            position = read_point(pose.pose.position, f'{field}.pose.position')
+            quaternion = read_quaternion(pose.pose.orientation, f'{field}.pose.orientation') \
+                if kind in ('axis', 'pose') else None
+        except ValueError as error:
+            raise RequestError(f'{error} ({kind} task)') from None
+        if kind == 'planar' and abs(position[2]) > _PLANAR_Z_TOLERANCE:
             raise InputError(f'{field}.pose.position.z',
-                             f'is {xyz[2]} but the planar arm works in z = 0')
-        return xyz[:m]
+                             f'is {position[2]} but the planar arm works in z = 0')
+        return task_point(kind, position, quaternion)
 
     def _report_failure(self, reason: str, values: dict, level: str = 'WARN') -> None:
         values['reason'] = reason
@@ -285,8 +432,8 @@ class PlannerNode(Node):
 
     def _publish_plan(self, scene: Scene, result: PlanResult, stamp, values: dict) -> Path:
         """Return the end-effector Path; the results and report follow the response."""
-        path = create_path(scene.robot.forward_kinematics(result.nominal_path),
-                           scene.frame_id, stamp)
+        positions, orientations = end_effector_poses(scene.robot, result.nominal_path)
+        path = create_path(positions, scene.frame_id, stamp, orientations)
         with self._lock:
             self._pending_results = (scene, result, stamp, values)
         self.results_timer.reset()
@@ -357,12 +504,16 @@ def display_web(paths: np.ndarray, most: int = MARKER_WEB_SIZE) -> np.ndarray:
 
 def plan_markers(scene: Scene, result: PlanResult, stamp, joint_space_frame: str,
                  ) -> MarkerArray:
-    """Draw a plan for RViz: arm at θ_s, end-effector path, M_s, M_g, S_F (thinned), obstacles."""
+    """Draw a plan for RViz: arm at θ_s, end-effector path, M_s, M_g, S_F (thinned), obstacles.
+
+    The arm and the tool's path are in 3-D in the base frame; the joint-space objects
+    show joints 1-3 as x, y, z.
+    """
     robot = scene.robot
     markers = create_plan_markers(
         scene.frame_id, stamp,
-        arm_polylines={'arm_theta_s': robot.joint_positions(result.theta_s)},
-        end_effector_path=robot.forward_kinematics(result.nominal_path),
+        arm_polylines={'arm_theta_s': robot.skeleton(result.theta_s)},
+        end_effector_path=end_effector_poses(robot, result.nominal_path)[0],
         joint_space_frame=joint_space_frame,
         joint_space_curves={
             'start_manifold': [b.points for b in result.start_manifolds if len(b) > 1],

@@ -19,12 +19,23 @@ obstacle topic (sampled at most `collision_check_step` apart) and reports collis
 the minimum clearance and arrival at the goal on /diagnostics ('ftplan_sim: arm').
 `~/reset` (std_srvs/Trigger) puts the arm back at its initial configuration, unlocks
 every joint and clears the counters, for repeated drills.
+
+Arrival is judged with the core's task errors: the tool within `goal_tolerance` [m] of
+the goal's position and, for axis and pose tasks, within `orientation_tolerance` [rad]
+of its orientation; the goal is the scene task's, taken as a task of kind `task_kind`
+('' = the scene's; set it like the planner's). The clearance check screens every sample
+cheaply and measures exactly only where the screen sees a contact, so a collision is
+exact; `min_clearance_m` is measured exactly at the samples the screen found closest
+since the last stop. A scene file without a robot takes it from /robot_description
+(scene_source.py); until then the sim publishes nothing.
 """
 
 from __future__ import annotations
 
+import heapq
 import time
 import traceback
+from dataclasses import replace
 
 import numpy as np
 from rclpy.node import Node
@@ -40,10 +51,12 @@ from ftplan_msgs_py import (
     read_locked_joint,
     time_to_seconds,
 )
-from ftplan_ros.core import CollisionChecker, Scene
+from ftplan_ros.core import CollisionChecker, InputError, Robot, Scene, Task, task_errors
 from ftplan_ros.core.angles import wrap_configuration
-from ftplan_ros.core.manifolds import trace_self_motion_manifolds
+from ftplan_ros.core.manifolds import project_many, trace_self_motion_manifolds
 from ftplan_ros.core.paths import densify
+from ftplan_ros.core.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
+from ftplan_ros.core.task_space import POINT_SIZE, unit_vector
 
 from .obstacles import ObstacleSet
 from .params import (
@@ -52,41 +65,106 @@ from .params import (
     check_startup_parameters,
     declare,
     declare_array,
-    declare_scene,
     non_negative,
     positive,
 )
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
 from .reporting import Diagnostics, format_vector
+from .scene_source import SceneSource
 from .spinning import run_node
+from .tasks import bind_task_kind, check_task_kind, convert_task_point
 from .topics import (
     JOINT_COMMAND,
     JOINT_STATES,
     LOCKED_JOINT,
     OBSTACLES,
     RESET_SERVICE,
+    ROBOT_DESCRIPTION,
     SIM_NODE,
 )
 
 _LOCK_SNAP_TOLERANCE = 1e-9  # [rad]
+IK_SEEDS = 64  # random seeds of the inverse kinematics for a default start (r >= 2)
+CLOSEST_SAMPLES = 8  # samples measured exactly for min_clearance_m at each stop
 
 
-def default_initial_configuration(scene: Scene) -> np.ndarray:
-    """Return the clearest configuration (n,) [rad] with the end effector at the task start.
+def default_initial_configuration(scene: Scene, rng: np.random.Generator | None = None,
+                                  ) -> np.ndarray:
+    """Return the clearest configuration (n,) [rad] found with the tool at the task start.
 
-    Without a task, the stretched-out arm (all zeros).
+    With one degree of redundancy the candidates are the points of the traced start
+    manifold M_s; with more, Newton solutions from `IK_SEEDS` random seeds. Both stay
+    within the joint limits, and periodic joints are wrapped. Without a task, or when
+    nothing reaches the start, the zero configuration moved into the limits.
     """
     robot = scene.robot
-    if scene.task is None or robot.n_joints - robot.task_dim != 1:
-        return np.zeros(robot.n_joints)
-    branches = trace_self_motion_manifolds(robot, np.asarray(scene.task.start),
-                                           np.random.default_rng(0))
-    if not branches:
-        return np.zeros(robot.n_joints)
-    points = np.vstack([b.points for b in branches])
-    clearance = CollisionChecker(robot, scene.obstacles).min_clearance(points)
-    best = points[int(np.argmax(clearance))]
-    return wrap_configuration(best, robot.periodic)
+    fallback = np.clip(np.zeros(robot.n_joints), robot.limits[:, 0], robot.limits[:, 1])
+    redundancy = robot.n_joints - robot.task_dim
+    if scene.task is None or redundancy < 1:
+        return fallback
+    rng = rng if rng is not None else np.random.default_rng(0)
+    x_s = np.asarray(scene.task.start, dtype=float)
+    if redundancy == 1:
+        branches = trace_self_motion_manifolds(robot, x_s, rng)
+        points = np.vstack([b.points for b in branches]) if branches else np.zeros((0, 1))
+    else:
+        seeds = rng.uniform(robot.limits[:, 0], robot.limits[:, 1],
+                            size=(IK_SEEDS, robot.n_joints))
+        solved, converged = project_many(robot, x_s, seeds)
+        points = solved[converged]
+    if not len(points):
+        return fallback
+    return wrap_configuration(_clearest(CollisionChecker(robot, scene.obstacles), points),
+                              robot.periodic)
+
+
+def _clearest(checker: CollisionChecker, points: np.ndarray) -> np.ndarray:
+    """Return the clearest of the points (k, n): screened cheaply, the best measured exactly."""
+    bounds = checker.min_clearance(points, refine=False)
+    best = np.argsort(-bounds)[:CLOSEST_SAMPLES]
+    exact = checker.min_clearance(points[best])
+    return points[best[int(np.argmax(exact))]].copy()
+
+
+def task_scene(scene: Scene, kind: str) -> Scene:
+    """Return the scene with its robot and task as a task of `kind` ('' = as it is).
+
+    A task whose start or goal does not give a point of that kind is dropped.
+    """
+    robot = bind_task_kind(scene.robot, kind)
+    task = scene.task
+    if task is not None:
+        start, goal = convert_task_point(task.start, robot.task_kind), \
+            convert_task_point(task.goal, robot.task_kind)
+        task = None if start is None or goal is None else Task(
+            tuple(start), tuple(goal), task.goal_tolerance, task.orientation_tolerance)
+    return replace(scene, robot=robot, task=task)
+
+
+def configuration_problem(value, scene: Scene | None) -> str | None:
+    """Say what is wrong with an `initial_configuration` for the scene's arm (None: fine)."""
+    if not np.all(np.isfinite(value)):
+        return f'needs finite angles [rad], got {list(value)}'
+    if scene is None or not len(value) or len(value) == scene.robot.n_joints:
+        return None
+    return f'needs {scene.robot.n_joints} finite angles [rad], got {list(value)}'
+
+
+def goal_problem(value, scene: Scene | None) -> str | None:
+    """Say what is wrong with a `goal` task point for the scene's task kind (None: fine)."""
+    if not np.all(np.isfinite(value)):
+        return f'needs finite coordinates, got {list(value)}'
+    if scene is None or not len(value):
+        return None
+    kind = scene.robot.task_kind
+    if len(value) != POINT_SIZE[kind]:
+        return f'needs {POINT_SIZE[kind]} numbers for a {kind} goal (or none), got {list(value)}'
+    if kind in ('axis', 'pose'):
+        try:
+            unit_vector(value[3:], 'its axis' if kind == 'axis' else 'its quaternion')
+        except ValueError as error:
+            return str(error)
+    return None
 
 
 class Motion:
@@ -118,47 +196,27 @@ class SimNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(SIM_NODE, **kwargs)
-        self.scene = declare_scene(self)
-        robot = self.scene.robot
+        self.diagnostics = Diagnostics(self)
+        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
         self.rate = declare(self, 'rate', 100.0,
                             'Rate [Hz] of the simulation steps and of /joint_states.',
                             read_only=True)
-        declare(self, 'max_joint_speed', 2.0,
-                'Velocity limit [rad/s] of every joint; faster commands are slowed down.')
-        declare(self, 'collision_check_step', 0.01,
-                'Largest joint step [rad] between two collision checks along the motion.')
-        declare(self, 'goal_tolerance', 0.0,
-                'Distance [m] from the goal that counts as reached (0: the scene task\'s).')
-        declare(self, 'brake_on_lock', True,
-                'Stop every joint when one locks, until the next command.')
-        declare_array(self, 'initial_configuration', Parameter.Type.DOUBLE_ARRAY,
-                      'Configuration [rad] at start and after ~/reset (default: the clearest '
-                      'configuration at the task start).')
-        declare_array(self, 'goal', Parameter.Type.DOUBLE_ARRAY,
-                      'End-effector goal [m] (default: the scene task goal).')
-        validators = {
-            'rate': positive, 'max_joint_speed': positive, 'collision_check_step': positive,
-            'goal_tolerance': non_negative,
-            'initial_configuration': self._check_configuration,
-            'goal': self._check_goal,
-        }
-        check_startup_parameters(self, validators)
-        add_validators(self, validators)
-
-        self.names = list(robot.joint_names)
-        self.diagnostics = Diagnostics(self)
-        self._obstacles = ObstacleSet(self.scene)
-        given = array_parameter(self, 'initial_configuration')
-        self.initial = np.array(given, dtype=float) if given else \
-            default_initial_configuration(self.scene)
-        self.q = self.initial.copy()
+        self.scene: Scene | None = None   # bound to task_kind (task_scene)
+        self._declare_parameters()
+        self.names: list[str] = []
+        self._obstacles = ObstacleSet(None)
+        self.q = np.zeros(0)
+        self.initial = np.zeros(0)
         self.motion: Motion | None = None
         self.locked: dict[int, float] = {}
         self.resets = 0
+        self.sim_time = 0.0  # [s] advanced by 1/rate each tick
         self._clear_counters()
-
         self.joint_state_publisher = self.create_publisher(
             JointState, JOINT_STATES, EVENT_QOS_DEPTH)
+        if self.source.scene is not None:
+            self._use_scene(task_scene(self.source.scene,
+                                       self.get_parameter('task_kind').value))
         self.command_subscription = self.create_subscription(
             JointTrajectory, JOINT_COMMAND, self.joint_command_callback, EVENT_QOS_DEPTH)
         self.locked_joint_subscription = self.create_subscription(
@@ -168,40 +226,106 @@ class SimNode(Node):
         self.reset_service = self.create_service(Trigger, RESET_SERVICE,
                                                  self.reset_callback)
         self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
-        self.sim_time = 0.0  # [s] advanced by 1/rate each tick
+
+    def _declare_parameters(self) -> None:
+        declare(self, 'max_joint_speed', 2.0,
+                'Velocity limit [rad/s] of every joint; faster commands are slowed down.')
+        declare(self, 'collision_check_step', 0.01,
+                'Largest joint step [rad] between two collision checks along the motion.')
+        declare(self, 'goal_tolerance', 0.0,
+                'Distance [m] from the goal that counts as reached (0: the scene task\'s).')
+        declare(self, 'orientation_tolerance', 0.0,
+                'Orientation error [rad] at the goal that counts as reached, for axis and '
+                'pose tasks (0: the scene task\'s).')
+        declare(self, 'task_kind', '',
+                'How the goal is judged: position, axis or pose ("" = the scene\'s task '
+                'kind); set it like the planner\'s.', read_only=True)
+        declare(self, 'brake_on_lock', True,
+                'Stop every joint when one locks, until the next command.')
+        declare_array(self, 'initial_configuration', Parameter.Type.DOUBLE_ARRAY,
+                      'Configuration [rad] at start and after ~/reset (default: the clearest '
+                      'configuration found at the task start).')
+        declare_array(self, 'goal', Parameter.Type.DOUBLE_ARRAY,
+                      'Goal task point (default: the scene task goal): [x, y] planar, '
+                      '[x, y, z] position, [x, y, z, ax, ay, az] axis, [x, y, z, qx, qy, qz, '
+                      'qw] pose; [m].')
+        validators = {
+            'rate': positive, 'max_joint_speed': positive, 'collision_check_step': positive,
+            'goal_tolerance': non_negative, 'orientation_tolerance': non_negative,
+            'task_kind': check_task_kind,
+            'initial_configuration': self._check_configuration,
+            'goal': self._check_goal,
+        }
+        check_startup_parameters(self, validators)
+        add_validators(self, validators)
+
+    # The robot ----------------------------------------------------------------------
+
+    def _use_scene(self, scene: Scene) -> None:
+        """Simulate `scene`'s robot from now on, from its initial configuration."""
+        for name, check in (('initial_configuration', configuration_problem),
+                            ('goal', goal_problem)):
+            problem = check(array_parameter(self, name), scene)
+            if problem:
+                raise InputError(name, problem)
+        problems = self._obstacles.rebase(scene)
+        self.scene = scene
+        self.names = list(scene.robot.joint_names)
+        given = array_parameter(self, 'initial_configuration')
+        self.initial = np.array(given, dtype=float) if given else \
+            default_initial_configuration(scene)
+        self.q = self.initial.copy()
+        self.motion = None
+        self.locked = {}
+        self._clear_counters()
+        for problem in problems:
+            self.diagnostics.rejected('input', f'ignored obstacle markers: {problem}')
         self._check_clearance(self.q[None, :])
         self.publish_joint_state(np.zeros(len(self.names)))
         self.report('at the initial configuration', log=True)
 
+    def _scene_changed(self, scene: Scene) -> None:
+        """Take a robot from /robot_description: the arm starts afresh."""
+        try:
+            self._use_scene(task_scene(scene, self.get_parameter('task_kind').value))
+        except InputError as error:
+            self.diagnostics.report('robot_description', 'ERROR', f'cannot simulate the robot '
+                                    f'from {ROBOT_DESCRIPTION}: {error}', log=True)
+
     # Parameters ---------------------------------------------------------------------
 
     def _check_configuration(self, value) -> str | None:
-        n = self.scene.robot.n_joints
-        if len(value) != n or not np.all(np.isfinite(value)):
-            return f'needs {n} finite angles [rad], got {list(value)}'
-        return None
+        return configuration_problem(value, self.scene)
 
     def _check_goal(self, value) -> str | None:
-        m = self.scene.robot.task_dim
-        if len(value) not in (0, m) or not np.all(np.isfinite(value)):
-            return f'needs {m} finite coordinates [m] (or none), got {list(value)}'
-        return None
+        return goal_problem(value, self.scene)
 
-    def goal(self) -> tuple[np.ndarray | None, float]:
-        """Return the goal (m,) [m] (None if unknown) and its tolerance [m]."""
+    def goal(self) -> tuple[np.ndarray | None, Task | None]:
+        """Return the goal task point (None if unknown) and the task whose tolerances apply."""
         given = array_parameter(self, 'goal')
         task = self.scene.task
         goal = np.array(given, dtype=float) if given else \
             (np.asarray(task.goal, dtype=float) if task else None)
-        tolerance = float(self.get_parameter('goal_tolerance').value)
-        if tolerance == 0.0:
-            tolerance = task.goal_tolerance if task else 0.01
-        return goal, tolerance
+        tolerance = float(self.get_parameter('goal_tolerance').value) or \
+            (task.goal_tolerance if task else DEFAULT_GOAL_TOLERANCE)
+        angle = float(self.get_parameter('orientation_tolerance').value) or \
+            (task.orientation_tolerance if task else DEFAULT_ORIENTATION_TOLERANCE)
+        if goal is None:
+            return None, None
+        return goal, Task(tuple(goal), tuple(goal), tolerance, angle)
+
+    @property
+    def robot(self) -> Robot:
+        """The simulated arm (bound to the kind of task arrival is judged by)."""
+        return self.scene.robot
 
     # Inputs -------------------------------------------------------------------------
 
     def joint_command_callback(self, msg: JointTrajectory) -> None:
         """Follow a new command from where the arm is; an empty one stops the arm."""
+        if self.scene is None:
+            self.diagnostics.rejected('input', f'ignored joint command: {self.source.waiting}')
+            return
         try:
             if not msg.points:
                 self.motion = None
@@ -247,6 +371,10 @@ class SimNode(Node):
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored locked-joint event: {error}')
             return
+        if self.scene is None:
+            self.diagnostics.rejected('input', f'ignored lock of {event.name}: '
+                                      f'{self.source.waiting}')
+            return
         if event.name not in self.names:
             self.diagnostics.rejected('input', f'ignored lock of unknown joint {event.name!r}; '
                                       f'the arm has {self.names}')
@@ -280,6 +408,9 @@ class SimNode(Node):
     def reset_callback(self, request: Trigger.Request, response: Trigger.Response,
                        ) -> Trigger.Response:
         """Back to the initial configuration, every joint free, counters cleared."""
+        if self.scene is None:
+            response.success, response.message = False, self.source.waiting
+            return response
         given = array_parameter(self, 'initial_configuration')
         if given:
             self.initial = np.array(given, dtype=float)
@@ -299,6 +430,8 @@ class SimNode(Node):
 
     def timer_callback(self) -> None:
         """Advance the arm, check its sweep for collisions, publish the joint state."""
+        if self.scene is None:
+            return
         dt = 1.0 / self.rate
         self.sim_time += dt
         previous = self.q
@@ -328,10 +461,19 @@ class SimNode(Node):
             self.diagnostics.report('arm', 'ERROR', f'internal sim error: {error!r}')
 
     def _check_clearance(self, samples: np.ndarray) -> None:
-        clearance = self._obstacles.checker.min_clearance(samples)
+        """Check samples (k, n) [rad] of the motion; a collision is measured exactly."""
+        clearance = self._obstacles.checker.min_clearance(samples, needed=0.0)
         worst = int(np.argmin(clearance))
-        self.min_clearance = min(self.min_clearance, float(clearance[worst]))
         colliding = bool(clearance[worst] <= 0.0)
+        if colliding:
+            self.min_clearance = min(self.min_clearance, float(clearance[worst]))
+        for bound, q in zip(clearance.tolist(), samples, strict=True):
+            self._samples += 1
+            entry = (-bound, self._samples, q.copy())
+            if len(self._closest) < CLOSEST_SAMPLES:
+                heapq.heappush(self._closest, entry)
+            elif -bound > self._closest[0][0]:
+                heapq.heapreplace(self._closest, entry)
         if colliding and not self._in_collision:
             self.collisions += 1
             self._in_collision = True
@@ -340,24 +482,41 @@ class SimNode(Node):
         elif not colliding:
             self._in_collision = False
 
+    def _measure_closest(self) -> None:
+        """Measure exactly the samples the screen found closest since the last time."""
+        if not self._closest:
+            return
+        samples = np.array([q for _, _, q in self._closest])
+        self._closest = []
+        exact = self._obstacles.checker.min_clearance(samples)
+        self.min_clearance = min(self.min_clearance, float(exact.min()))
+
     def _report_stop(self) -> None:
-        goal, tolerance = self.goal()
+        self._measure_closest()
+        goal, task = self.goal()
         if goal is None:
             self.report('stopped')
             return
-        error = float(np.linalg.norm(self.scene.robot.forward_kinematics(self.q) - goal))
-        self.goal_error = error
-        self.goal_reached = error <= tolerance
+        position, angle = (float(v) for v in task_errors(self.robot, goal, self.q))
+        self.goal_error, self.goal_orientation_error = position, angle
+        self.goal_reached = bool(task.reached(np.array([position, angle])))
+        error = f'{position:.2e} m' + (f', {angle:.2e} rad' if self.robot.task_kind in
+                                       ('axis', 'pose') else '')
         if self.goal_reached:
-            self.report(f'goal reached (error {error:.2e} m)', log=True)
+            self.report(f'goal reached (error {error})', log=True)
         else:
-            self.report(f'stopped {error:.3f} m from the goal')
+            self.report(f'stopped {error} from the goal')
 
     def _clear_counters(self) -> None:
         self.collisions = 0
         self.min_clearance = float('inf')
         self.goal_reached = False
         self.goal_error = float('nan')
+        self.goal_orientation_error = float('nan')
+        # The samples with the smallest screened clearance since the last stop, as a heap
+        # of (-bound, sample number, configuration).
+        self._closest: list[tuple[float, int, np.ndarray]] = []
+        self._samples = 0
         self._in_collision = False
         self._reported_stop = True
         self._last_report = 0.0
@@ -381,6 +540,7 @@ class SimNode(Node):
             'min_clearance_m': self.min_clearance,
             'goal_reached': self.goal_reached,
             'goal_error_m': self.goal_error,
+            'goal_orientation_error_rad': self.goal_orientation_error,
         }
         self.diagnostics.report('arm', level, message, values, log=log)
 

@@ -1,6 +1,7 @@
 """Default names of ftplan's topics and services (CONTRACT.md); remap them with --ros-args."""
 
 JOINT_STATES = '/joint_states'
+ROBOT_DESCRIPTION = '/robot_description'
 OBSTACLES = '/ftplan/obstacles'
 PLAN_SERVICE = '/ftplan/plan'
 START_CONFIGURATION = '/ftplan/plan/start_configuration'

@@ -1,0 +1,104 @@
+"""What a plan is for, beyond its latched topics: the planner's status on /diagnostics.
+
+The latched topics carry θ_s, the joint path and S_F. The task they were planned for,
+its tolerances and the joints whose lock the plan tolerates are values of the planner's
+status 'ftplan_planner: plan' (stamped like the plan):
+
+| key | value |
+|---|---|
+| `stamp` | the plan's stamp 'sec.nanosec' |
+| `task_kind` | planar, position, axis or pose |
+| `start`, `goal` | task points '[x, y, ...]' (task_space.py) |
+| `tolerance`, `orientation_tolerance` | [m], [rad] |
+| `tolerated_joints` | joint names, comma-separated (e.g. 'joint1,joint3') |
+
+The executor reads them to judge arrival and to name an untolerated lock, and repeats
+`tolerated_joints` in its execution status, which the injector reads for random drills.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ftplan_ros.core import Task
+
+from .reporting import parse_vector
+
+PLANNER_STATUS = 'ftplan_planner: plan'
+
+
+def join_names(names: Sequence[str]) -> str:
+    """Return joint names as one comma-separated value."""
+    return ','.join(names)
+
+
+def split_names(text: str) -> tuple[str, ...]:
+    """Read back `join_names`."""
+    return tuple(name for name in text.split(',') if name)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanInfo:
+    """A plan's task (task points, tolerances [m], [rad]) and tolerated joints."""
+
+    stamp: str
+    task_kind: str
+    start: np.ndarray
+    goal: np.ndarray
+    goal_tolerance: float
+    orientation_tolerance: float
+    tolerated_joints: tuple[str, ...]
+
+    @property
+    def task(self) -> Task:
+        """The plan's task, as the core's Task."""
+        return Task(tuple(self.start), tuple(self.goal), self.goal_tolerance,
+                    self.orientation_tolerance)
+
+
+def format_point(values) -> str:
+    """Return a task point as '[a, b, ...]' with every digit (parse_vector reads it back)."""
+    return '[' + ', '.join(repr(float(v)) for v in values) + ']'
+
+
+def plan_info_values(task: Task, tolerated: Sequence[str]) -> dict[str, object]:
+    """Return the status values that describe a plan's task (the table above, no stamp)."""
+    return {'task_kind': task.kind, 'start': format_point(task.start),
+            'goal': format_point(task.goal), 'tolerance': task.goal_tolerance,
+            'orientation_tolerance': task.orientation_tolerance,
+            'tolerated_joints': join_names(tolerated)}
+
+
+def read_plan_info(values: Mapping[str, str]) -> PlanInfo | None:
+    """Read a plan status's values; None when they do not describe a plan."""
+    try:
+        return PlanInfo(values['stamp'], values['task_kind'],
+                        np.array(parse_vector(values['start'])),
+                        np.array(parse_vector(values['goal'])), float(values['tolerance']),
+                        float(values['orientation_tolerance']),
+                        split_names(values['tolerated_joints']))
+    except (KeyError, ValueError):
+        return None
+
+
+class PlanInfos:
+    """The plan infos of the latest plans, by stamp (the oldest are dropped)."""
+
+    def __init__(self, size: int = 8):
+        self.size = size
+        self._infos: OrderedDict[str, PlanInfo] = OrderedDict()
+
+    def add(self, info: PlanInfo) -> None:
+        """Keep `info`."""
+        self._infos[info.stamp] = info
+        self._infos.move_to_end(info.stamp)
+        while len(self._infos) > self.size:
+            self._infos.popitem(last=False)
+
+    def get(self, stamp: str) -> PlanInfo | None:
+        """Return the info of the plan stamped `stamp`, if it arrived."""
+        return self._infos.get(stamp)
