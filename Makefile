@@ -65,12 +65,16 @@ demo-core: $(VENV_STAMP)
 		--json $(OUT)/panda_shelf_drill.json --png $(OUT)/panda_shelf_drill.png
 
 # Then the same through ROS 2: planner, executor, sim and injector nodes in one process,
-# joint2 locked at 40% of the nominal path; writes the executed motion as a PNG. The ROS
-# layout is built too, so `ros2 run ftplan_ros <node>` works after `make demo`.
+# joint2 locked at 40% of the nominal path (and the Panda's panda_joint2 in the shelf);
+# writes the executed motions as PNGs. The ROS layout is built too, so
+# `ros2 run ftplan_ros <node>` works after `make demo`.
 demo: demo-core $(ROS_LAYOUT)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST} \
 		$(BIN)/ftplan-bringup --scene config/scenes/fig3a.yaml --drill joint2@0.4 \
 		--png $(OUT)/demo_motion.png
+	ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST} \
+		$(BIN)/ftplan-bringup --scene config/scenes/panda_shelf.yaml \
+		--drill panda_joint2@0.4 --drill panda_joint6@0.7 --png $(OUT)/panda_shelf_motion.png
 
 test: $(ROS_LAYOUT)
 	$(BIN)/python -m pytest $(PYTEST_ARGS)

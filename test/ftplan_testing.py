@@ -1,15 +1,20 @@
-"""Test helpers shared by the unit tests: the repository's paths and the paper's scenes.
+"""Test helpers shared by the unit tests: the repository's paths, scenes and robots.
 
 (Not in conftest.py: test/ros has a conftest.py of its own, and the two would clash as
 modules named `conftest`.)
 """
 
+import struct
+from functools import cache
 from pathlib import Path
+
+import numpy as np
 
 from ftplan_ros.core.scene import Scene, parse_scene
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / 'config' / 'scenes'
+ROBOTS = REPO / 'config' / 'robots'
 
 
 def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:
@@ -22,8 +27,134 @@ def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:
 
 def jacobian(robot, theta):
     """The task Jacobian (m, n) of a robot at θ (n,) [rad], as the planner computes it."""
-    import numpy as np
-
     from ftplan_ros.core.robot import task_residuals
     theta = np.asarray(theta, dtype=float)
     return task_residuals(robot, robot.forward_kinematics(theta), theta)[1][0]
+
+
+@cache
+def robot_config(name: str, task_kind: str = 'pose'):
+    """The robot of config/robots/<name>.yaml, bound to `task_kind` when it is spatial."""
+    robot = parse_scene({'robot': f'{name}.yaml'}, directory=ROBOTS).robot
+    return robot if robot.task_kind == 'planar' else robot.with_task_kind(task_kind)
+
+
+# The Barrett WAM's first four joints (standard DH): a spherical shoulder and an elbow.
+WAM4 = {
+    'type': 'dh', 'link_radius': 0.04, 'tip_offset': [0.0, 0.0, 0.35],
+    'joint_names': ['wam_j1', 'wam_j2', 'wam_j3', 'wam_j4'],
+    'rows': [{'a': 0.0, 'alpha': -np.pi / 2, 'd': 0.0},
+             {'a': 0.0, 'alpha': np.pi / 2, 'd': 0.0, 'limits': [-2.0, 2.0]},
+             {'a': 0.045, 'alpha': -np.pi / 2, 'd': 0.55, 'limits': [-2.8, 2.8]},
+             {'a': -0.045, 'alpha': np.pi / 2, 'd': 0.0, 'limits': [-0.9, 3.1]}],
+}
+
+
+@cache
+def wam4(task_kind: str = 'position'):
+    """The 4-DOF WAM of `WAM4` (joint 1 without limits), bound to `task_kind`."""
+    return parse_scene({'robot': WAM4}).robot.with_task_kind(task_kind)
+
+
+TETRAHEDRON = (np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]),
+               np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+CUBE = (np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05)
+                  for z in (-0.05, 0.05)]),
+        np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]))
+
+
+def write_binary_stl(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """Write a triangle mesh as a binary STL file (80-byte header, 50 bytes a triangle)."""
+    with open(path, 'wb') as out:
+        out.write(b'ftplan test mesh'.ljust(80, b' '))
+        out.write(struct.pack('<I', len(faces)))
+        for face in faces:
+            a, b, c = (np.asarray(vertices[k], dtype=float) for k in face)
+            normal = np.cross(b - a, c - a)
+            normal /= np.linalg.norm(normal)
+            out.write(struct.pack('<12fH', *normal, *a, *b, *c, 0))
+
+
+# A 4-joint arm with what URDFs have: a continuous joint, an axis not along x, y or z,
+# fixed joints folded in (a bracket with a sphere, the TCP), a finger on a prismatic joint
+# off the chain, and a link whose collision geometry is a mesh (scaled).
+BOT_MESH_SCALE = (1.0, 2.0, 1.0)
+BOT_MESH_ORIGIN = ((0.0, 0.0, 0.1), (0.1, 0.2, 0.3))  # xyz, rpy in link l2
+BOT_TIP_OFFSET = (0.01, 0.0, 0.02)
+
+
+def bot_urdf(mesh: str = 'tet.stl') -> str:
+    """The test robot's URDF, its mesh link pointing at the file `mesh`."""
+    (mx, my, mz), (mr, mp, myaw) = BOT_MESH_ORIGIN
+    scale = ' '.join(str(v) for v in BOT_MESH_SCALE)
+    return f'''<?xml version="1.0"?>
+<robot name="testbot">
+  <link name="base">
+    <collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision>
+  </link>
+  <joint name="spin" type="continuous">
+    <parent link="base"/><child link="l1"/><origin xyz="0 0 0.1" rpy="0 0 0.3"/>
+    <axis xyz="0 0 1"/>
+  </joint>
+  <link name="l1">
+    <collision><origin xyz="0 0 0.15"/><geometry><cylinder radius="0.04" length="0.3"/></geometry>
+    </collision>
+  </link>
+  <joint name="tilt" type="revolute">
+    <parent link="l1"/><child link="l2"/><origin xyz="0.02 0 0.3" rpy="0.2 -0.1 0.4"/>
+    <axis xyz="0 0.6 0.8"/><limit lower="-2.0" upper="2.5" effort="1" velocity="1"/>
+  </joint>
+  <link name="l2">
+    <collision><origin xyz="{mx} {my} {mz}" rpy="{mr} {mp} {myaw}"/>
+      <geometry><mesh filename="{mesh}" scale="{scale}"/></geometry></collision>
+  </link>
+  <joint name="bracket" type="fixed">
+    <parent link="l2"/><child link="l2b"/><origin xyz="0 0.05 0.25" rpy="0 0.5 0"/>
+  </joint>
+  <link name="l2b"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="elbow" type="revolute">
+    <parent link="l2b"/><child link="l3"/><origin xyz="0 0 0.1"/>
+    <axis xyz="1 0 0"/><limit lower="-1.5" upper="1.5" effort="1" velocity="1"/>
+  </joint>
+  <link name="l3">
+    <collision><origin xyz="0 0 0.12"/><geometry><box size="0.05 0.06 0.24"/></geometry>
+    </collision>
+  </link>
+  <joint name="wrist" type="revolute">
+    <parent link="l3"/><child link="hand"/><origin xyz="0 0 0.24"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="hand">
+    <collision><origin xyz="0 0 0.03"/><geometry><box size="0.08 0.04 0.06"/></geometry>
+    </collision>
+  </link>
+  <joint name="tcp_joint" type="fixed">
+    <parent link="hand"/><child link="tcp"/><origin xyz="0 0 0.1" rpy="0 0 0.7"/>
+  </joint>
+  <link name="tcp"/>
+  <joint name="finger_joint" type="prismatic">
+    <parent link="hand"/><child link="finger"/><origin xyz="0 0.02 0.06"/>
+    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/>
+  </joint>
+  <link name="finger">
+    <collision><origin xyz="0 0 0.02"/><geometry><box size="0.02 0.02 0.04"/></geometry>
+    </collision>
+  </link>
+</robot>
+'''
+
+
+def write_bot(directory: Path) -> Path:
+    """Write the test robot's URDF and its mesh (a tetrahedron) into `directory`."""
+    write_binary_stl(directory / 'tet.stl', *TETRAHEDRON)
+    path = directory / 'testbot.urdf'
+    path.write_text(bot_urdf())
+    return path
+
+
+def bot(urdf: Path, task_kind: str = 'position'):
+    """The test robot of the URDF file `urdf` (`write_bot`), base to `tcp`."""
+    from ftplan_ros.core.scene import robot_from_urdf
+    return robot_from_urdf(urdf.read_text(), 'tcp', tip_offset=BOT_TIP_OFFSET,
+                           mesh_dirs=[str(urdf.parent)], task_kind=task_kind)

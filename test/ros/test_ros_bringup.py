@@ -30,7 +30,7 @@ def test_bad_input_exits_2_with_one_line(processes):
         assert code == 2, (args, out, err)
         assert problem in err and 'Traceback' not in err
     code, _, err = processes(BRINGUP + ['--scene', '/nonexistent.yaml']).wait(timeout=120)
-    assert code == 2 and 'cannot read scene file' in err
+    assert code == 2 and 'cannot read nonexistent.yaml (no such file)' in err
 
 
 def test_ctrl_c_shuts_every_node_down_cleanly(processes):

@@ -18,7 +18,7 @@ def test_plan_writes_the_contract_json(tmp_path):
     run = ftplan('plan', SCENES / 'fig3a.yaml', '--json', out)
     assert run.returncode == 0, run.stderr
     assert 'feasible: theta_s = [' in run.stdout
-    assert 'H3 hit on M_g^F' in run.stdout
+    assert 'H3 (joint3) hit on M_g^F' in run.stdout
     assert 'tracing self-motion manifolds' in run.stderr  # the progress lines
     data = json.loads(out.read_text())
     assert data['feasible'] is True
@@ -98,7 +98,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, name):
 
 def test_missing_file_and_bad_arguments_exit_2(tmp_path):
     run = ftplan('plan', tmp_path / 'nope.yaml')
-    assert run.returncode == 2 and 'cannot read scene file' in run.stderr
+    assert run.returncode == 2 and 'cannot read nope.yaml (no such file)' in run.stderr
     run = ftplan('drill', SCENES / 'fig3a.yaml', '--trials', 0)
     assert run.returncode == 2 and '--trials: must be at least 1' in run.stderr
     run = ftplan('plan', SCENES / 'fig3a.yaml', '--margin', 'nan')

@@ -1,69 +1,222 @@
+"""Clearances against independent references: closed forms and dense surface sampling.
+
+The checker's distances come in tiers (collision.py); whatever the tier, a value must
+never exceed the true distance, and it must equal it where it claims to be exact.
+References here are written independently of the core: signed distances of the
+obstacles in closed form, shapes' surfaces sampled densely.
+"""
+
 import numpy as np
 import pytest
+from ftplan_testing import CUBE, TETRAHEDRON, bot, robot_config
+from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
 
-from ftplan_ros.core.collision import CollisionChecker, point_clearance, rotation_from_rpy
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle
+from ftplan_ros.core import collision
+from ftplan_ros.core.chain import ChainModel
+from ftplan_ros.core.collision import CollisionChecker
+from ftplan_ros.core.curves import FrozenJoints
+from ftplan_ros.core.dh import DHRow, chain_from_dh
+from ftplan_ros.core.distance_kernels import (
+    BOX,
+    CAPSULE,
+    CODES,
+    CYLINDER,
+    SPHERE,
+    segment_distance,
+    segment_signed_distance,
+)
+from ftplan_ros.core.errors import InputError
+from ftplan_ros.core.geometry import (
+    Shape,
+    rotation_from_rpy,
+    separation,
+    signed_distance,
+    support,
+    transform,
+)
+from ftplan_ros.core.planner import check_plannable
+from ftplan_ros.core.robot import LinkShape, PlanarChain
+from ftplan_ros.core.scene import Obstacle, Scene, Task, with_disabled_collisions
+from ftplan_ros.core.spatial import SpatialArm
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
+SPACING = 0.002  # [m] between surface samples: sampled distances exceed the truth by less
 
 
-def spheres(rng, count=8):
-    return [Obstacle('sphere', (rng.uniform(-2.5, 2.5), rng.uniform(-2.5, 2.5),
-                                rng.uniform(-0.1, 0.1)), radius=rng.uniform(0.05, 0.4))
-            for _ in range(count)]
+# Independent references -----------------------------------------------------------------
+
+def obstacle_frame(obstacle):
+    """Rotation (3, 3) of an obstacle: fixed-axis roll, pitch, yaw (scipy's 'xyz')."""
+    return Rotation.from_euler('xyz', obstacle.rpy).as_matrix()
 
 
-@pytest.mark.parametrize('radius', [0.0, 0.07])
-def test_numpy_and_fcl_backends_agree(rng, radius):
-    arm = PlanarChain((1.0, 0.8, 0.6), ('a', 'b', 'c'), link_radius=radius)
-    obstacles = spheres(rng)
-    thetas = rng.uniform(-np.pi, np.pi, (300, 3))
-    fast = CollisionChecker(arm, obstacles, backend='numpy').clearance(thetas)
-    exact = CollisionChecker(arm, obstacles, backend='fcl').clearance(thetas)
-    positive = exact > 1e-3
-    assert positive.sum() > 300  # most are clear; compare distances there
-    # The fcl backend gives certified lower bounds: close, and never above the exact value.
-    assert np.allclose(fast[positive], exact[positive], atol=1e-9)
-    assert np.all(exact[positive] <= fast[positive] + 1e-12)
-    # Where either reports contact, the other does not call the link free (fcl says 0 for
-    # a link within its 1 cm padding).
-    assert np.all(exact[fast <= 0] == 0)
-    assert np.all(fast[exact <= 0] <= max(0.0, 0.01 - radius) + 1e-12)
-    assert (fast < 0).sum() > 10
+def distance_to_obstacle(obstacle, points):
+    """Signed distance (P,) [m] from world points (P, 3) to an obstacle, by closest points."""
+    local = (np.asarray(points, dtype=float) - obstacle.center) @ obstacle_frame(obstacle)
+    if obstacle.shape == 'sphere':
+        return np.linalg.norm(local, axis=1) - obstacle.radius
+    if obstacle.shape == 'box':
+        half = 0.5 * np.asarray(obstacle.size)
+        closest = np.clip(local, -half, half)
+        outside = np.linalg.norm(local - closest, axis=1)
+        depth = np.min(half - np.abs(local), axis=1)
+        return np.where(depth > 0.0, -depth, outside)
+    radial = np.hypot(local[:, 0], local[:, 1])
+    half = 0.5 * obstacle.length
+    out_r = np.maximum(radial - obstacle.radius, 0.0)
+    out_z = np.maximum(np.abs(local[:, 2]) - half, 0.0)
+    depth = np.minimum(obstacle.radius - radial, half - np.abs(local[:, 2]))
+    return np.where(depth > 0.0, -depth, np.hypot(out_r, out_z))
 
+
+def grid(low, high, spacing):
+    return np.linspace(low, high, max(2, int(np.ceil((high - low) / spacing)) + 1))
+
+
+def fibonacci_sphere(radius, spacing):
+    count = max(8, int(np.ceil(4.0 * np.pi * radius ** 2 / spacing ** 2)))
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    angle = np.pi * (1.0 + 5 ** 0.5) * k
+    r = np.sqrt(1.0 - z * z)
+    return radius * np.stack([r * np.cos(angle), r * np.sin(angle), z], axis=1)
+
+
+def disk(radius, z, spacing):
+    rings = [np.array([[0.0, 0.0, z]])]
+    for rho in grid(0.0, radius, spacing)[1:]:
+        phi = np.linspace(0.0, 2 * np.pi, max(8, int(np.ceil(2 * np.pi * rho / spacing))),
+                          endpoint=False)
+        rings.append(np.stack([rho * np.cos(phi), rho * np.sin(phi), np.full_like(phi, z)], 1))
+    return np.vstack(rings)
+
+
+def surface_points(shape, spacing=SPACING):
+    """Points (P, 3) on a shape's surface, in its frame, at most about `spacing` apart."""
+    if shape.kind == 'sphere':
+        return fibonacci_sphere(shape.radius, spacing)
+    if shape.kind == 'box':
+        half = 0.5 * np.asarray(shape.size)
+        faces = []
+        for axis in range(3):
+            u, v = (a for a in range(3) if a != axis)
+            uu, vv = np.meshgrid(grid(-half[u], half[u], spacing), grid(-half[v], half[v], spacing))
+            for side in (-1.0, 1.0):
+                face = np.zeros((uu.size, 3))
+                face[:, u], face[:, v], face[:, axis] = uu.ravel(), vv.ravel(), side * half[axis]
+                faces.append(face)
+        return np.vstack(faces)
+    if shape.kind in ('cylinder', 'capsule'):
+        half = 0.5 * shape.length
+        phi = np.linspace(0.0, 2 * np.pi, max(8, int(np.ceil(2 * np.pi * shape.radius / spacing))),
+                          endpoint=False)
+        pp, zz = np.meshgrid(phi, grid(-half, half, spacing))
+        side = np.stack([shape.radius * np.cos(pp).ravel(), shape.radius * np.sin(pp).ravel(),
+                         zz.ravel()], axis=1)
+        if shape.kind == 'cylinder':
+            return np.vstack([side, disk(shape.radius, -half, spacing),
+                              disk(shape.radius, half, spacing)])
+        ball = fibonacci_sphere(shape.radius, spacing)
+        return np.vstack([side, ball[ball[:, 2] >= 0] + [0, 0, half],
+                          ball[ball[:, 2] <= 0] - [0, 0, half]])
+    pieces = []
+    for face in shape.faces:
+        a, b, c = shape.vertices[face]
+        steps = max(1, int(np.ceil(max(np.linalg.norm(b - a), np.linalg.norm(c - a)) / spacing)))
+        s, t = np.meshgrid(np.arange(steps + 1), np.arange(steps + 1))
+        inside = s + t <= steps
+        s, t = s[inside] / steps, t[inside] / steps
+        pieces.append(a + np.outer(s, b - a) + np.outer(t, c - a))
+    return np.vstack(pieces)
+
+
+def posed(points, pose):
+    return points @ pose[:3, :3].T + pose[:3, 3]
+
+
+def closest(first, second):
+    """Smallest distance [m] between two point sets (P, 3) and (Q, 3)."""
+    return float(cKDTree(second).query(first)[0].min())
+
+
+def one_shape_arm(shape, placement=None):
+    """A one-joint arm (about z through the base) whose only link carries `shape`."""
+    model = ChainModel('one', ('j',), ('base', 'link'), np.eye(4)[None], np.array([[0, 0, 1.0]]),
+                       np.eye(4), (None,), (LinkShape(1, shape, np.eye(4) if placement is None
+                                                      else placement),))
+    return SpatialArm(model, 'position')
+
+
+def random_pose(rng, spread=0.1):
+    return transform(Rotation.random(random_state=rng.integers(1 << 31)).as_matrix(),
+                     rng.uniform(-spread, spread, 3))
+
+
+def random_link_shape(kind, rng):
+    if kind == 'box':
+        return Shape('box', size=tuple(rng.uniform(0.05, 0.3, 3)))
+    if kind in ('cylinder', 'capsule'):
+        return Shape(kind, radius=rng.uniform(0.02, 0.1), length=rng.uniform(0.05, 0.4))
+    if kind == 'sphere':
+        return Shape('sphere', radius=rng.uniform(0.02, 0.15))
+    vertices, faces = {'cube': CUBE, 'tetrahedron': TETRAHEDRON}[kind]
+    return Shape('mesh', vertices=vertices * rng.uniform(1.0, 2.0), faces=faces)
+
+
+def random_obstacle(kind, rng, spread=0.5):
+    center = tuple(rng.uniform(-spread, spread, 3))
+    rpy = tuple(rng.uniform(-np.pi, np.pi, 3))
+    if kind == 'sphere':
+        return Obstacle('sphere', center, radius=rng.uniform(0.02, 0.15))
+    if kind == 'box':
+        return Obstacle('box', center, size=tuple(rng.uniform(0.05, 0.3, 3)), rpy=rpy)
+    return Obstacle('cylinder', center, radius=rng.uniform(0.03, 0.1),
+                    length=rng.uniform(0.05, 0.4), rpy=rpy)
+
+
+def sampled_distance(arm, theta, obstacle):
+    """Smallest obstacle distance [m] over the arm's only shape's sampled surface."""
+    item, = arm.collision_shapes
+    pose = arm.link_frames(theta)[0, item.link] @ item.placement
+    return float(distance_to_obstacle(obstacle, posed(surface_points(item.shape), pose)).min())
+
+
+# The planar arm of the paper ------------------------------------------------------------
 
 def test_box_distances_per_link():
     box = Obstacle('box', (1.5, 0.5, 0.0), size=(0.2, 0.2, 1.0))
     clearance = CollisionChecker(ARM, [box]).clearance(np.zeros((1, 3)))[0]
-    assert np.allclose(clearance, [np.hypot(0.4, 0.4), 0.4, np.hypot(0.4, 0.4)], atol=2e-4)
+    assert np.allclose(clearance, [np.hypot(0.4, 0.4), 0.4, np.hypot(0.4, 0.4)], atol=1e-8)
 
 
 def test_rotated_box_and_cylinder():
     # A box rotated 45 degrees about z: its corner points down at the arm.
     box = Obstacle('box', (1.5, 0.5, 0.0), size=(0.2, 0.2, 1.0), rpy=(0.0, 0.0, np.pi / 4))
     clearance = CollisionChecker(ARM, [box]).clearance(np.zeros((1, 3)))[0]
-    assert clearance[1] == pytest.approx(0.5 - 0.1 * np.sqrt(2), abs=2e-4)
+    assert clearance[1] == pytest.approx(0.5 - 0.1 * np.sqrt(2), abs=1e-8)
     # A cylinder lying along x above the arm (axis rotated from z by pitch 90 degrees).
     cylinder = Obstacle('cylinder', (1.5, 0.6, 0.0), radius=0.1, length=0.4,
                         rpy=(0.0, np.pi / 2, 0.0))
     clearance = CollisionChecker(ARM, [cylinder]).clearance(np.zeros((1, 3)))[0]
-    assert clearance[1] == pytest.approx(0.5, abs=2e-4)
-    assert clearance[0] == pytest.approx(np.hypot(0.3, 0.5), abs=2e-4)
+    assert clearance[1] == pytest.approx(0.5, abs=1e-8)
+    assert clearance[0] == pytest.approx(np.hypot(0.3, 0.5), abs=1e-8)
 
 
 def test_rotation_from_rpy_is_z_y_x():
     assert np.allclose(rotation_from_rpy((0, 0, np.pi / 2)) @ [1, 0, 0], [0, 1, 0])
     assert np.allclose(rotation_from_rpy((0, np.pi / 2, 0)) @ [0, 0, 1], [1, 0, 0])
     assert np.allclose(rotation_from_rpy((np.pi / 2, 0, 0)) @ [0, 1, 0], [0, 0, 1])
+    rpy = (0.3, -1.1, 2.5)
+    assert np.allclose(rotation_from_rpy(rpy), Rotation.from_euler('xyz', rpy).as_matrix())
 
 
 def test_penetration_is_negative_and_link_radius_counts():
-    disk = Obstacle('sphere', (1.5, 0.1, 0.0), radius=0.2)
-    thin = CollisionChecker(ARM, [disk]).clearance(np.zeros((1, 3)))[0]
+    disk_ = Obstacle('sphere', (1.5, 0.1, 0.0), radius=0.2)
+    thin = CollisionChecker(ARM, [disk_]).clearance(np.zeros((1, 3)))[0]
     assert thin[1] == pytest.approx(-0.1)
     fat = CollisionChecker(PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=0.05),
-                           [disk]).clearance(np.zeros((1, 3)))[0]
+                           [disk_]).clearance(np.zeros((1, 3)))[0]
     assert fat[1] == pytest.approx(-0.15)
 
 
@@ -72,54 +225,396 @@ def test_no_obstacles_means_infinite_clearance_and_checks_are_counted():
     assert np.all(np.isinf(checker.clearance(np.zeros((4, 3)))))
     checker.min_clearance(np.zeros((6, 3)))
     assert checker.checks == 10
+    assert checker.clearance(np.zeros((0, 3))).shape == (0, 3)
 
 
-def test_backend_choice():
-    box = Obstacle('box', (1.5, 0.5, 0.0), size=(0.2, 0.2, 1.0))
-    assert CollisionChecker(ARM, [box]).backend == 'fcl'
-    assert CollisionChecker(ARM, [Obstacle('sphere', (1, 1, 0), radius=0.1)]).backend == 'numpy'
-    with pytest.raises(ValueError, match='sphere obstacles only'):
-        CollisionChecker(ARM, [box], backend='numpy')
+def test_unknown_backend():
     with pytest.raises(ValueError, match='unknown collision backend'):
         CollisionChecker(ARM, [], backend='gpu')
 
 
-def test_point_clearance():
-    obstacles = [Obstacle('sphere', (0.1, 0.0, 0.0), radius=0.2),
-                 Obstacle('box', (1.0, 0.0, 0.0), size=(0.5, 0.5, 0.5))]
-    distance = point_clearance(obstacles, np.zeros(3))
-    assert distance[0] == 0
-    assert distance[1] == pytest.approx(0.75, abs=1e-6)  # the point query is not lowered
-
-
-def point_box_distance(points, center, size):
-    """Exact distance from points (k, 3) to an axis-aligned box (independent of fcl)."""
-    gap = np.maximum(np.abs(points - center) - 0.5 * np.asarray(size), 0.0)
-    return np.linalg.norm(gap, axis=1)
-
-
-def test_fcl_box_distances_match_a_dense_point_sampling(rng):
-    center, size = np.array([1.2, 0.9, 0.0]), (0.3, 0.5, 0.4)
-    checker = CollisionChecker(ARM, [Obstacle('box', tuple(center), size=size)])
-    assert checker.backend == 'fcl'
+def test_planar_spheres_against_the_segments_by_brute_force(rng):
+    arm = PlanarChain((1.0, 0.8, 0.6), ('a', 'b', 'c'), link_radius=0.07)
+    obstacles = [Obstacle('sphere', tuple(rng.uniform(-2.0, 2.0, 2)) + (0.0,),
+                          radius=rng.uniform(0.05, 0.4)) for _ in range(6)]
+    thetas = rng.uniform(-np.pi, np.pi, (100, 3))
+    clearance = CollisionChecker(arm, obstacles).clearance(thetas)
     t = np.linspace(0.0, 1.0, 2001)[:, None]
-    separated = touching = 0
-    for theta in rng.uniform(-np.pi, np.pi, (40, 3)):
-        clearance = checker.clearance(theta[None])[0]
-        for j, (a, b) in enumerate(ARM.link_segments(theta)):
-            sampled = point_box_distance(a + t * (b - a), center, size).min()
-            if sampled > 1e-3:  # separated: fcl must agree with the sampling to its spacing
-                assert clearance[j] == pytest.approx(sampled, abs=1e-3)
-                assert clearance[j] <= sampled  # the sampled minimum can only be higher
-                separated += 1
-            else:  # a sample touches the box: so must fcl's link
-                assert clearance[j] <= 1e-3
-                touching += 1
-    assert separated >= 100 and touching >= 1  # both branches ran, on most of the 120 links
+    for theta, row in zip(thetas, clearance, strict=True):
+        joints = np.hstack([arm.joint_positions(theta), np.zeros((4, 1))])
+        for j in range(3):
+            points = joints[j] + t * (joints[j + 1] - joints[j])
+            expected = min(distance_to_obstacle(ob, points).min() for ob in obstacles) - 0.07
+            assert expected - 5e-4 <= row[j] <= expected + 1e-9  # samples 0.5 mm apart
 
 
-def test_a_sphere_centred_on_the_point_is_answered():
-    """fcl's signed-distance query never returns for concentric shapes: it is not used."""
-    centred = [Obstacle('sphere', (0.0, 0.0, 0.0), radius=0.2),
-               Obstacle('cylinder', (0.0, 0.0, 0.0), radius=0.2, length=0.4)]
-    assert np.all(point_clearance(centred, np.zeros(3)) == 0)
+# Tier 1: closed forms with a sphere -----------------------------------------------------
+
+@pytest.mark.parametrize('kind', ['box', 'cylinder', 'capsule', 'sphere'])
+def test_sphere_obstacles_against_link_shapes_in_closed_form(kind, rng):
+    for _ in range(20):
+        shape, placement = random_link_shape(kind, rng), random_pose(rng)
+        arm = one_shape_arm(shape, placement)
+        ball = random_obstacle('sphere', rng)
+        theta = rng.uniform(-np.pi, np.pi, (1, 1))
+        pose = arm.link_frames(theta)[0, 1] @ placement
+        local = (np.asarray(ball.center) - pose[:3, 3]) @ pose[:3, :3]
+        if kind == 'box':
+            half = 0.5 * np.asarray(shape.size)
+            depth = np.min(half - np.abs(local))
+            core = -depth if depth > 0 else np.linalg.norm(local - np.clip(local, -half, half))
+        elif kind == 'cylinder':
+            radial, height = np.hypot(*local[:2]) - shape.radius, abs(local[2]) - 0.5 * shape.length
+            core = max(radial, height) if max(radial, height) < 0 else \
+                np.hypot(max(radial, 0.0), max(height, 0.0))
+        elif kind == 'capsule':
+            along = np.clip(local[2], -0.5 * shape.length, 0.5 * shape.length)
+            core = np.linalg.norm(local - [0, 0, along]) - shape.radius
+        else:
+            core = np.linalg.norm(local) - shape.radius
+        value = CollisionChecker(arm, [ball]).clearance(theta)[0, 0]
+        assert value == pytest.approx(core - ball.radius, abs=1e-9)
+
+
+@pytest.mark.parametrize('kind', ['box', 'cylinder'])
+def test_sphere_links_against_obstacles_in_closed_form(kind, rng):
+    for _ in range(20):
+        ball = Shape('sphere', radius=rng.uniform(0.02, 0.15))
+        placement = random_pose(rng, spread=0.3)
+        arm = one_shape_arm(ball, placement)
+        obstacle = random_obstacle(kind, rng)
+        theta = rng.uniform(-np.pi, np.pi, (1, 1))
+        centre = (arm.link_frames(theta)[0, 1] @ placement)[:3, 3]
+        expected = distance_to_obstacle(obstacle, centre[None])[0] - ball.radius
+        assert CollisionChecker(arm, [obstacle]).clearance(theta)[0, 0] == \
+            pytest.approx(expected, abs=1e-9)
+
+
+# Tiers 2-3: boxes, cylinders and meshes against dense sampling ----------------------------
+
+@pytest.mark.parametrize('link_kind, obstacle_kind', [
+    ('box', 'box'), ('box', 'cylinder'), ('cylinder', 'box'), ('cylinder', 'cylinder'),
+    ('capsule', 'box'), ('capsule', 'cylinder')])
+def test_link_shapes_against_obstacles_match_dense_sampling(link_kind, obstacle_kind, rng):
+    """Never above the sampled distance, and within the sampling error of it when apart."""
+    apart = 0
+    for _ in range(25):
+        shape, placement = random_link_shape(link_kind, rng), random_pose(rng)
+        arm = one_shape_arm(shape, placement)
+        obstacle = random_obstacle(obstacle_kind, rng)
+        theta = rng.uniform(-np.pi, np.pi, (1, 1))
+        value = CollisionChecker(arm, [obstacle]).clearance(theta)[0, 0]
+        sampled = sampled_distance(arm, theta, obstacle)
+        assert value <= max(sampled, 0.0) + 1e-9
+        if sampled > SPACING:
+            apart += 1
+            assert value >= sampled - SPACING
+        else:
+            assert value <= SPACING
+    assert apart >= 15
+
+
+def mesh_cases(mesh, obstacle_kind, rng, count=15):
+    """(value, sampled distance) of random poses of a mesh link and an obstacle."""
+    for _ in range(count):
+        shape, placement = random_link_shape(mesh, rng), random_pose(rng)
+        arm = one_shape_arm(shape, placement)
+        obstacle = random_obstacle(obstacle_kind, rng)
+        theta = rng.uniform(-np.pi, np.pi, (1, 1))
+        yield (CollisionChecker(arm, [obstacle]).clearance(theta)[0, 0],
+               sampled_distance(arm, theta, obstacle))
+
+
+@pytest.mark.parametrize('mesh', ['cube', 'tetrahedron'])
+@pytest.mark.parametrize('obstacle_kind', ['sphere', 'box', 'cylinder'])
+def test_meshes_give_lower_bounds(mesh, obstacle_kind, rng):
+    for value, sampled in mesh_cases(mesh, obstacle_kind, rng):
+        assert value <= max(sampled, 0.0) + 1e-9
+
+
+@pytest.mark.parametrize('obstacle_kind', ['sphere', 'box', 'cylinder'])
+def test_mesh_distances_are_refined_to_the_truth(obstacle_kind, rng):
+    """A convex mesh apart from an obstacle: tier 3 (fcl's nearest points) makes it exact.
+
+    The separation of two convex shapes along the line of their nearest points is their
+    distance; a bound far below it means the direction was wrong.
+    """
+    loose = []
+    for value, sampled in mesh_cases('tetrahedron', obstacle_kind, rng):
+        if sampled > SPACING and value < sampled - SPACING:
+            loose.append((round(float(value), 4), round(sampled, 4)))
+    assert not loose, f'(value, sampled distance) [m]: {loose}'
+
+
+def test_capsule_pairs_against_dense_segment_sampling(rng):
+    """Self-collision of capsule links: the segments' distance minus both radii."""
+    rows = [DHRow(a=0.4, alpha=0.7, d=0.1), DHRow(a=0.3, alpha=-1.1, d=0.2),
+            DHRow(a=0.35, alpha=0.4, d=0.0), DHRow(a=0.3, alpha=0.0, d=0.1)]
+    model = chain_from_dh(rows, ['a', 'b', 'c', 'd'], 0.03)
+    model = with_disabled_collisions(model, [])
+    arm = SpatialArm(model, 'position')
+    checker = CollisionChecker(arm, [])
+    assert checker.pairs == ((1, 2), (1, 3), (1, 4), (2, 3), (2, 4), (3, 4))
+    t = np.linspace(0.0, 1.0, 801)
+    for theta in rng.uniform(-np.pi, np.pi, (12, 4)):
+        row = checker.clearance(theta[None])[0, 4:]  # after the 4 links' obstacle channels
+        frames = arm.link_frames(theta)
+        segments = []
+        for item in arm.collision_shapes:
+            pose = frames[item.link] @ item.placement
+            ends = pose[:3, 3] + np.outer([-0.5, 0.5], pose[:3, 2]) * item.shape.length
+            segments.append(ends[0] + t[:, None] * (ends[1] - ends[0]))
+        for value, (a, b) in zip(row, checker.pairs, strict=True):
+            first, second = segments[a - 1], segments[b - 1]
+            gaps = closest(first, second) - 0.06
+            assert value <= gaps + 1e-9
+            assert value >= gaps - 0.4 / 800
+
+
+def test_self_collision_pairs_of_a_urdf_arm_are_lower_bounds(bot_urdf_file, rng):
+    """Every pair of the test robot (a mesh link among them) against dense sampling."""
+    arm = bot(bot_urdf_file)
+    checker = CollisionChecker(arm, [])
+    items = arm.collision_shapes
+    number = [sum(1 for other in items[:k] if other.link == item.link)
+              for k, item in enumerate(items)]
+    names = [f'{arm.link_names[item.link]}[{k}]' for item, k in zip(items, number, strict=True)]
+    local = [surface_points(item.shape, 0.005) for item in items]
+    pair_columns = [(c, name.split(' / ')) for c, name in enumerate(checker.channel_names)
+                    if ' / ' in name]
+    assert pair_columns
+    for theta in rng.uniform(arm.limits[:, 0], arm.limits[:, 1], (8, arm.n_joints)):
+        row = checker.clearance(theta[None])[0]
+        frames = arm.link_frames(theta)
+        points = [posed(p, frames[item.link] @ item.placement)
+                  for p, item in zip(local, items, strict=True)]
+        for c, (first, second) in pair_columns:
+            a, b = names.index(first), names.index(second)
+            assert row[c] <= closest(points[a], points[b]) + 1e-9
+
+
+# Backends, `needed`, `refine` and culling ----------------------------------------------------
+
+@pytest.fixture(scope='module')
+def panda_scene():
+    rng = np.random.default_rng(3)
+    obstacles = [random_obstacle(kind, rng, spread=0.7) for kind in
+                 ('sphere', 'box', 'cylinder', 'box', 'cylinder', 'sphere', 'box')]
+    robot = robot_config('panda', 'pose')
+    thetas = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (60, robot.n_joints))
+    return robot, obstacles, thetas
+
+
+def test_fcl_backend_agrees_with_auto(panda_scene):
+    robot, obstacles, thetas = panda_scene
+    auto = CollisionChecker(robot, obstacles).clearance(thetas)
+    measured = CollisionChecker(robot, obstacles, backend='fcl').clearance(thetas)
+    assert np.allclose(auto, measured, atol=1e-12, rtol=0.0)
+    assert (auto < 0.05).sum() > 20  # some channels were close enough to matter
+
+
+def test_needed_values_are_exact_below_and_bounds_above(panda_scene, rng):
+    robot, obstacles, thetas = panda_scene
+    checker = CollisionChecker(robot, obstacles)
+    full = checker.clearance(thetas)
+    for needed in (0.0, 0.05, rng.uniform(0.0, 0.3, full.shape)):
+        partial = checker.clearance(thetas, needed)
+        below = full < needed
+        assert below.any() and (~below).any()
+        assert np.allclose(partial[below], full[below], atol=1e-12, rtol=0.0)
+        above = np.broadcast_to(needed, full.shape)[~below]
+        assert np.all(partial[~below] >= above - 1e-12)
+        assert np.all(partial[~below] <= full[~below] + 1e-12)
+        lowest = checker.min_clearance(thetas, float(np.min(needed)))
+        assert np.all(lowest <= full.min(axis=1) + 1e-12)
+
+
+def test_without_refinement_every_value_is_a_lower_bound(panda_scene):
+    robot, obstacles, thetas = panda_scene
+    checker = CollisionChecker(robot, obstacles)
+    full = checker.clearance(thetas)
+    screen = checker.clearance(thetas, refine=False)
+    assert np.all(screen <= full + 1e-12)
+    assert np.any(screen < full - 1e-3)  # the screen does skip work
+    spheres = [ob for ob in obstacles if ob.shape == 'sphere']
+    exact = CollisionChecker(robot, spheres)  # sphere obstacles: tier 1, exact either way
+    moving = sum(item.link != 0 for item in robot.collision_shapes)
+    assert np.array_equal(exact.clearance(thetas, refine=False)[:, :moving],
+                          exact.clearance(thetas)[:, :moving])
+
+
+def uncapped(robot, obstacles, thetas, monkeypatch):
+    """Clearances with culling switched off: the reference for culled obstacles."""
+    with monkeypatch.context() as patch:
+        patch.setattr(collision, 'CULL_DISTANCE', np.inf)
+        return CollisionChecker(robot, obstacles).clearance(thetas)
+
+
+@pytest.mark.parametrize('name', ['panda', 'frozen-iiwa'])
+def test_culled_obstacles_leave_lower_bounds(name, monkeypatch, rng):
+    """Far obstacles are dropped, and the clearance is capped by a bound on their distance."""
+    if name == 'panda':
+        robot = robot_config('panda', 'pose')
+    else:  # the first joint frozen: the arm's reach is measured from the second
+        robot = FrozenJoints(robot_config('iiwa14', 'position'), (0,), (0.0,))
+    far = [Obstacle('sphere', (0.0, 0.0, 2.7), radius=0.1),
+           Obstacle('box', (3.0, 0.5, 0.2), size=(0.3, 0.3, 0.3), rpy=(0.2, 0.1, 0.0)),
+           Obstacle('cylinder', (-2.0, -2.0, 0.5), radius=0.2, length=1.0)]
+    near = [Obstacle('sphere', (0.5, 0.0, 0.5), radius=0.1)]
+    thetas = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (40, robot.n_joints))
+    thetas[0] = 0.0  # stretched up
+    moving = sum(item.link != 0 for item in robot.collision_shapes)
+    capped = CollisionChecker(robot, far).clearance(thetas)[:, :moving]
+    assert np.all(capped == capped[0, 0])  # culled: every channel holds the cap
+    assert capped[0, 0] > collision.CULL_DISTANCE
+    with_near = CollisionChecker(robot, far + near).clearance(thetas)[:, :moving]
+    assert np.all(with_near <= uncapped(robot, far + near, thetas, monkeypatch)[:, :moving] + 1e-9)
+    reference = uncapped(robot, far, thetas, monkeypatch)[:, :moving]
+    assert np.all(capped <= reference + 1e-9), \
+        f'cap {capped[0, 0]:.4f} m above the distance {reference.min():.4f} m'
+
+
+# Self-collision, the base, channel names ------------------------------------------------
+
+def folding_arm(disabled=None):
+    """Three capsule links of 0.5 m (radius 0.05) turning about parallel z axes."""
+    rows = [DHRow(a=0.5, alpha=0.0, d=0.0) for _ in range(3)]
+    model = chain_from_dh(rows, ['a', 'b', 'c'], 0.05)
+    return SpatialArm(with_disabled_collisions(model, disabled), 'position')
+
+
+def test_a_pair_that_touches_reads_negative_and_disabled_pairs_are_absent():
+    arm = folding_arm()
+    checker = CollisionChecker(arm, [])
+    assert checker.pairs == ((1, 3),)  # adjacent links are exempt
+    assert checker.channel_names[-1] == 'link1[0] / link3[0]'
+    folded = np.array([[0.0, np.pi, np.pi], [0.0, 0.0, 0.0], [0.0, np.pi, 2.5]])
+    clearance = checker.clearance(folded)
+    assert clearance[0, -1] == pytest.approx(-0.1)  # link 3 lies on link 1
+    assert clearance[1, -1] == pytest.approx(0.5 - 0.1)  # straight: 0.5 m apart
+    assert clearance[2, -1] <= 0.0
+    exempt = CollisionChecker(folding_arm([['link1', 'link2'], ['link2', 'link3'],
+                                           ['link1', 'link3']]), [])
+    assert exempt.pairs == () and exempt.n_channels == 3
+    assert np.all(np.isinf(exempt.clearance(folded)))
+
+
+def test_base_clearance_of_obstacles_over_the_base():
+    robot = robot_config('panda', 'pose')
+    obstacles = [Obstacle('sphere', (0.0, 0.0, 0.3), radius=0.05),
+                 Obstacle('box', (0.0, 0.0, 0.05), size=(0.1, 0.1, 0.1)),
+                 Obstacle('cylinder', (-0.075, 0.0, 0.2), radius=0.05, length=0.1)]
+    clearance = CollisionChecker(robot, obstacles).base_clearance()
+    assert clearance[0] == pytest.approx(0.3 - 0.145 - 0.05, abs=1e-9)  # above the top
+    assert clearance[1] <= 0.0
+    assert clearance[2] == pytest.approx(0.15 - 0.145, abs=1e-6)
+    task = Task((0.4, 0.0, 0.5), (0.4, 0.2, 0.5))
+    with pytest.raises(InputError, match=r'obstacles\[1\]: covers the robot base'):
+        check_plannable(Scene(robot.with_task_kind('position'), tuple(obstacles), task))
+
+
+def test_channels_are_named_per_shape():
+    assert CollisionChecker(ARM, []).channel_names == ['link1[0]', 'link2[0]', 'link3[0]']
+    robot = robot_config('panda', 'pose')
+    checker = CollisionChecker(robot, [])
+    names = checker.channel_names
+    assert len(names) == checker.n_channels == len(checker.lever_arms())
+    moving = [item for item in robot.collision_shapes if item.link != 0]
+    assert names[:len(moving)] == [
+        f'{robot.link_names[item.link]}[{sum(o.link == item.link for o in moving[:k])}]'
+        for k, item in enumerate(moving)]
+    assert names[len(moving)] == 'panda_link0[0] / panda_link4[0]'
+    assert all(' / ' in name for name in names[len(moving):])
+    links = checker.channel_links
+    assert np.all(links[:len(moving), 1] == -1)
+    assert {tuple(pair) for pair in links[len(moving):].tolist()} == set(robot.self_collision_pairs)
+
+
+# geometry.py and distance_kernels.py -----------------------------------------------------
+
+SHAPES = ['sphere', 'box', 'cylinder', 'capsule', 'cube', 'tetrahedron']
+
+
+@pytest.mark.parametrize('kind', SHAPES)
+def test_support_is_the_farthest_point_along_a_direction(kind, rng):
+    for _ in range(10):
+        shape, pose = random_link_shape(kind, rng), random_pose(rng, spread=0.5)
+        points = posed(surface_points(shape, 0.004), pose)
+        for direction in Rotation.random(5, random_state=rng.integers(1 << 31)).apply([1, 0, 0]):
+            value = support(shape, pose[:3, :3], pose[:3, 3], direction)
+            farthest = float(np.max(points @ direction))
+            assert farthest - 1e-12 <= value <= farthest + 0.004
+        centre, radius = shape.bounding_sphere()
+        assert np.all(np.linalg.norm(posed(surface_points(shape, 0.01), np.eye(4)) - centre,
+                                     axis=1) <= radius + 1e-12)
+
+
+@pytest.mark.parametrize('first', SHAPES)
+@pytest.mark.parametrize('second', SHAPES)
+def test_separation_is_a_lower_bound_for_any_direction(first, second, rng):
+    for _ in range(5):
+        a, b = random_link_shape(first, rng), random_link_shape(second, rng)
+        pose_a, pose_b = random_pose(rng, 0.3), random_pose(rng, 0.3)
+        points_a = posed(surface_points(a, 0.01), pose_a)
+        points_b = posed(surface_points(b, 0.01), pose_b)
+        nearest = closest(points_a, points_b)
+        axis = pose_b[:3, 3] - pose_a[:3, 3]
+        for direction in [axis / np.linalg.norm(axis),
+                          *Rotation.random(4, random_state=rng.integers(1 << 31)).apply([1, 0, 0])]:
+            bound = separation(a, (pose_a[:3, :3], pose_a[:3, 3]), b,
+                               (pose_b[:3, :3], pose_b[:3, 3]), direction)
+            assert bound <= nearest + 1e-12
+
+
+@pytest.mark.parametrize('kind', ['sphere', 'box', 'cylinder', 'capsule'])
+def test_signed_distances_of_the_primitives(kind, rng):
+    shape = random_link_shape(kind, rng)
+    points = rng.uniform(-0.4, 0.4, (500, 3))
+    values = signed_distance(shape, points)
+    surface = surface_points(shape, 0.003)
+    nearest = cKDTree(surface).query(points)[0]
+    assert np.allclose(np.abs(values), nearest, atol=0.003)
+    if kind != 'capsule':
+        as_obstacle = Obstacle(kind, (0.0, 0.0, 0.0), radius=shape.radius, size=shape.size,
+                               length=shape.length)
+        assert np.allclose(values, distance_to_obstacle(as_obstacle, points), atol=1e-12)
+    with pytest.raises(ValueError, match='meshes'):
+        signed_distance(random_link_shape('cube', rng), points)
+
+
+def test_segment_distance_against_brute_force(rng):
+    t = np.linspace(0.0, 1.0, 601)
+    cases = [rng.uniform(-1.0, 1.0, (4, 3)) for _ in range(40)]
+    p = rng.uniform(-1.0, 1.0, 3)
+    cases += [np.array([p, p, [1.0, 0, 0], [0, 1.0, 0]]),   # a point and a segment
+              np.array([p, p, p + 0.3, p + 0.3]),           # two points
+              np.array([[0, 0, 0], [1.0, 0, 0], [0, 0.2, 0], [1.0, 0.2, 0]]),   # parallel
+              np.array([[0, 0, 0], [1.0, 0, 0], [2.0, 0.1, 0], [3.0, 0.1, 0]]),  # collinear-ish
+              np.array([[0, 0, 0], [1.0, 0, 0], [0.5, -1.0, 0], [0.5, 1.0, 0]])]  # crossing
+    for p1, q1, p2, q2 in cases:
+        first = p1 + t[:, None] * (q1 - p1)
+        second = p2 + t[:, None] * (q2 - p2)
+        brute = np.linalg.norm(first[:, None] - second[None], axis=2).min()
+        value = segment_distance(p1, q1, p2, q2)
+        step = (np.linalg.norm(q1 - p1) + np.linalg.norm(q2 - p2)) / 600
+        assert brute - step - 1e-12 <= value <= brute + 1e-12
+
+
+@pytest.mark.parametrize('kind', ['sphere', 'box', 'cylinder', 'capsule'])
+def test_segment_signed_distance_against_brute_force(kind, rng):
+    code = CODES[kind]
+    assert code in (SPHERE, BOX, CYLINDER, CAPSULE)
+    shape = random_link_shape(kind, rng)
+    parameters = collision.shape_parameters(shape)
+    t = np.linspace(0.0, 1.0, 20001)[:, None]
+    for _ in range(20):
+        frame = random_pose(rng, 0.2)
+        start, end = rng.uniform(-0.5, 0.5, (2, 3))
+        points = start + t * (end - start)
+        brute = float(signed_distance(shape, (points - frame[:3, 3]) @ frame[:3, :3]).min())
+        exact = segment_signed_distance(code, parameters, frame, start, end, np.inf)
+        assert brute - 1e-4 <= exact <= brute + 1e-9
+        enough = brute - 0.05
+        early = segment_signed_distance(code, parameters, frame, start, end, enough)
+        assert early <= brute + 1e-9
+        assert early >= enough or abs(early - exact) < 1e-12

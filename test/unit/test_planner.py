@@ -4,9 +4,17 @@ import numpy as np
 import pytest
 from ftplan_testing import SCENES, paper_scene
 
-from ftplan_ros.core import CollisionChecker, InputError, load_scene, parse_scene, plan
+from ftplan_ros.core import (
+    CollisionChecker,
+    InputError,
+    load_scene,
+    parse_scene,
+    plan,
+    recover,
+    task_errors,
+)
 from ftplan_ros.core.brute_force import recoverable_in_plane
-from ftplan_ros.core.paths import point_at_fraction
+from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.scene import Obstacle, Task
 
 X_GOAL = np.array([1.0, 0.0])
@@ -153,10 +161,20 @@ def test_redundancy_is_checked():
 
 @pytest.mark.parametrize('seed', range(4))
 def test_a_narrow_band_of_starts_is_found_whatever_the_sampling(seed):
-    """fig3c leaves three feasible starts within 2 deg of the paper's; any seed finds one.
+    """fig3c leaves few feasible starts (the paper's among them); any seed finds a sound one.
 
     (Goal loops free all round are searched across the point where their tracing began.)
     """
-    result = plan(load_scene(SCENES / 'fig3c.yaml'), rng=np.random.default_rng(seed))
+    scene = load_scene(SCENES / 'fig3c.yaml')
+    result = plan(scene, rng=np.random.default_rng(seed))
     assert result.feasible, result.reason
-    assert np.degrees(np.max(np.abs(result.theta_s - np.radians([23.5, -73.0, 70.9])))) < 6
+    # Whichever start of the band it is, a lock on the way still gets to the goal: each
+    # recovery sampled every milliradian is collision-free and arrives.
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    for progress in np.linspace(0.0, 1.0, 11):
+        theta = point_at_fraction(result.nominal_path, progress)
+        for joint in range(3):
+            rescue = recover(result.surface, theta, joint)
+            assert rescue is not None
+            assert checker.min_clearance(densify(rescue.path, 1e-3), 1e-3).min() > 0.0
+            assert scene.task.reached(task_errors(scene.robot, X_GOAL, rescue.path[-1]))

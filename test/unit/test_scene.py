@@ -1,12 +1,16 @@
 import math
+import shutil
 
 import numpy as np
 import pytest
 import yaml
-from ftplan_testing import SCENES
+from ftplan_testing import ROBOTS, SCENES, WAM4, robot_config, write_bot
 
 from ftplan_ros.core.errors import InputError
-from ftplan_ros.core.scene import load_scene, parse_scene, scene_to_dict
+from ftplan_ros.core.robot import PlanarChain
+from ftplan_ros.core.scene import Task, load_scene, parse_scene, scene_to_dict
+from ftplan_ros.core.spatial import SpatialArm
+from ftplan_ros.core.task_space import TASK_DIM
 
 GOOD = {
     'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0], 'link_radius': 0.0,
@@ -32,8 +36,9 @@ def with_change(path, value):
 @pytest.mark.parametrize('name', sorted(p.stem for p in SCENES.glob('*.yaml')))
 def test_every_shipped_scene_loads(name):
     scene = load_scene(SCENES / f'{name}.yaml')
-    assert scene.robot.n_joints == 3
     assert scene.task is not None
+    assert scene.robot.task_kind == scene.task.kind
+    assert scene.robot.n_joints > TASK_DIM[scene.task.kind]
 
 
 def test_contract_example_parses():
@@ -67,7 +72,7 @@ def test_robot_file_reference(tmp_path):
     (tmp_path / 'scene.yaml').write_text('robot: arm.yaml\n')
     assert load_scene(tmp_path / 'scene.yaml').robot.n_joints == 3
     (tmp_path / 'bad.yaml').write_text('robot: missing.yaml\n')
-    with pytest.raises(InputError, match='robot: cannot read robot file missing.yaml'):
+    with pytest.raises(InputError, match=r'^robot: cannot read .*missing\.yaml'):
         load_scene(tmp_path / 'bad.yaml')
 
 
@@ -128,7 +133,7 @@ def test_malformed_files(tmp_path, text, message):
 
 
 def test_missing_file(tmp_path):
-    with pytest.raises(InputError, match='cannot read scene file'):
+    with pytest.raises(InputError, match=r'nope\.yaml: cannot read .*nope\.yaml'):
         load_scene(tmp_path / 'nope.yaml')
 
 
@@ -137,3 +142,183 @@ def test_with_obstacles_keeps_the_rest():
     more = scene.with_obstacles(scene.obstacles)
     assert len(more.obstacles) == 2 and more.task == scene.task
     assert np.allclose(more.obstacles[1].center, scene.obstacles[0].center)
+
+
+# Spatial scenes ---------------------------------------------------------------------------
+
+POSE = {'start': {'position': [0.5, -0.2, 0.4], 'orientation': [1.0, 0.0, 0.0, 0.0]},
+        'goal': {'position': [0.5, 0.2, 0.4], 'orientation': [0.0, 1.0, 0.0, 0.0]},
+        'goal_tolerance': 0.005, 'orientation_tolerance': 0.02}
+AXIS = {'start': {'position': [0.5, -0.2, 0.4], 'axis': [0.0, 0.0, -1.0]},
+        'goal': {'position': [0.5, 0.2, 0.4], 'axis': [0.0, 0.6, -0.8]}}
+POSITION = {'start': [0.5, -0.2, 0.4], 'goal': [0.5, 0.2, 0.4]}
+PANDA = {'robot': '../robots/panda.yaml', 'task': POSE,
+         'obstacles': [{'type': 'box', 'center': [0.5, 0.0, 0.2], 'size': [0.3, 0.6, 0.02]}],
+         'tolerate': ['panda_joint7', 'panda_joint1', 'panda_joint2']}
+
+
+def panda(**changes):
+    """The Panda scene PANDA with its keys changed (a value None deletes the key)."""
+    data = yaml.safe_load(yaml.safe_dump(PANDA))
+    for key, value in changes.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = value
+    return parse_scene(data, directory=SCENES)
+
+
+@pytest.mark.parametrize('task, kind', [(POSE, 'pose'), (AXIS, 'axis'), (POSITION, 'position')])
+def test_spatial_tasks_set_the_kind(task, kind):
+    scene = panda(task=task)
+    assert isinstance(scene.robot, SpatialArm) and scene.robot.n_joints == 7
+    assert scene.task.kind == scene.robot.task_kind == kind
+    assert len(scene.task.goal) == {'pose': 7, 'axis': 6, 'position': 3}[kind]
+    assert scene.obstacles[0].size == (0.3, 0.6, 0.02)
+
+
+def test_pose_and_axis_points_are_in_ros_order_and_unit():
+    scene = panda(task={'start': {'position': [0.5, -0.2, 0.4],
+                                  'orientation': [0.0, 0.0, 0.0, 1.0005]},
+                        'goal': POSE['goal']})
+    assert scene.task.start == pytest.approx((0.5, -0.2, 0.4, 0.0, 0.0, 0.0, 1.0))
+    assert scene.task.goal[3:] == (0.0, 1.0, 0.0, 0.0)
+    assert scene.task.goal_tolerance == 0.01 and scene.task.orientation_tolerance == 0.01
+    assert panda().task.goal_tolerance == 0.005
+    assert panda().task.orientation_tolerance == 0.02
+    axis = panda(task=AXIS).task
+    assert axis.goal[3:] == pytest.approx((0.0, 0.6, -0.8))
+
+
+def test_tolerate_is_kept_in_joint_order():
+    scene = panda()
+    assert scene.tolerate == ('panda_joint1', 'panda_joint2', 'panda_joint7')
+    assert scene.tolerated_joints == (0, 1, 6)
+    assert panda(tolerate=None).tolerated_joints == tuple(range(7))
+    assert scene.with_tolerated(None).tolerate is None
+    assert scene.with_tolerated(['panda_joint3']).tolerated_joints == (2,)
+
+
+def test_with_task_rebinds_a_spatial_arm():
+    scene = panda()
+    moved = scene.with_task(Task((0.4, 0.0, 0.5), (0.4, 0.1, 0.5)))
+    assert moved.robot.task_kind == 'position' and moved.robot.model is scene.robot.model
+    assert moved.obstacles == scene.obstacles and moved.tolerate == scene.tolerate
+
+
+def test_urdf_and_dh_robots_inline(tmp_path):
+    write_bot(tmp_path)
+    scene = tmp_path / 'scene.yaml'
+    scene.write_text(yaml.safe_dump({
+        'robot': {'type': 'urdf', 'file': 'testbot.urdf', 'tip_link': 'tcp',
+                  'tip_offset': [0.0, 0.0, 0.05]},
+        'task': {'start': [0.3, 0.0, 0.5], 'goal': [0.2, 0.2, 0.5]}}))
+    robot = load_scene(scene).robot
+    assert robot.joint_names == ('spin', 'tilt', 'elbow', 'wrist')
+    assert robot.task_kind == 'position'
+    assert np.allclose(robot.model.tool[:3, 3],
+                       robot.model.tool[:3, :3] @ [0, 0, 0.05] + [0.0, 0.0, 0.1], atol=1e-12)
+    dh = parse_scene({'robot': WAM4, 'task': {'start': [0.3, 0.0, 0.5], 'goal': [0.3, 0.1, 0.5]}})
+    assert dh.robot.joint_names == tuple(WAM4['joint_names']) and dh.robot.n_joints == 4
+    assert list(dh.robot.periodic) == [True, False, False, False]
+
+
+def test_a_robot_yaml_names_its_urdf_relative_to_itself(tmp_path):
+    (tmp_path / 'robots').mkdir()
+    (tmp_path / 'scenes').mkdir()
+    write_bot(tmp_path / 'robots')
+    (tmp_path / 'robots' / 'bot.yaml').write_text(yaml.safe_dump({'robot': {
+        'type': 'urdf', 'file': 'testbot.urdf', 'tip_link': 'tcp', 'base_link': 'base',
+        'disabled_collisions': [['base', 'l1'], ['l1', 'l2'], ['l2', 'l3'], ['l3', 'hand']]}}))
+    (tmp_path / 'scenes' / 'scene.yaml').write_text('robot: ../robots/bot.yaml\n')
+    robot = load_scene(tmp_path / 'scenes' / 'scene.yaml').robot
+    assert robot.model.disabled_pairs == {(0, 1), (1, 2), (2, 3), (3, 4)}
+    assert robot.self_collision_pairs == ((0, 2), (0, 3), (0, 4), (1, 3), (1, 4), (2, 4))
+
+
+def test_the_shipped_robot_yamls_copied_elsewhere_still_load(tmp_path):
+    for name in ('panda.yaml', 'panda.urdf'):
+        shutil.copy(ROBOTS / name, tmp_path / name)
+    (tmp_path / 'scene.yaml').write_text('robot: panda.yaml\n')
+    robot = load_scene(tmp_path / 'scene.yaml').robot
+    assert robot.model.disabled_pairs == robot_config('panda').model.disabled_pairs
+
+
+def test_a_scene_without_a_robot_takes_the_callers(tmp_path):
+    path = tmp_path / 'scene.yaml'
+    path.write_text(yaml.safe_dump({'task': POSITION, 'tolerate': ['panda_joint2']}))
+    arm = robot_config('panda', 'pose')
+    scene = load_scene(path, robot=arm)
+    assert scene.robot.model is arm.model and scene.robot.task_kind == 'position'
+    assert scene.tolerated_joints == (1,)
+    with pytest.raises(InputError, match=r'^robot: is missing'):
+        load_scene(path)
+
+
+def test_spatial_scenes_are_not_written_back():
+    with pytest.raises(ValueError, match='only planar scenes'):
+        scene_to_dict(panda())
+
+
+def task_with(point_key, value):
+    task = yaml.safe_load(yaml.safe_dump(POSE))
+    task['start'][point_key] = value
+    return task
+
+
+@pytest.mark.parametrize('changes, field', [
+    ({'task': task_with('orientation', [1.0, 0.0, 0.0, 0.1])},
+     r'task\.start\.orientation: a quaternion must have norm 1'),
+    ({'task': task_with('orientation', [1.0, 0.0, 0.0])},
+     r'task\.start\.orientation: needs 4 values'),
+    ({'task': task_with('orientation', [0.0, 0.0, 0.0, 0.0])},
+     r'task\.start\.orientation: a quaternion must have norm 1'),
+    ({'task': {'start': AXIS['start'], 'goal': {'position': [0.5, 0.2, 0.4],
+                                                'axis': [0.0, 0.0, -2.0]}}},
+     r'task\.goal\.axis: an axis must have norm 1'),
+    ({'task': task_with('axis', [0.0, 0.0, 1.0])},
+     r'task\.start: needs exactly one of orientation \(a pose\) or axis'),
+    ({'task': {'start': {'position': [0.5, -0.2, 0.4]}, 'goal': POSE['goal']}},
+     r'task\.start: needs exactly one of'),
+    ({'task': {'start': POSE['start'], 'goal': [0.5, 0.2, 0.4]}},
+     r'task\.goal: must have the same form as task\.start'),
+    ({'task': {'start': AXIS['start'], 'goal': POSE['goal']}},
+     r'task\.goal: must have the same form as task\.start'),
+    ({'task': {'start': [0.5, 0.2], 'goal': [0.5, 0.2, 0.4]}},
+     r'task\.start: needs 3 values, got 2'),
+    ({'task': task_with('colour', 'red')}, r'task\.start\.colour: unknown key'),
+    ({'task': task_with('position', [0.5, math.nan, 0.4])},
+     r'task\.start\.position\[1\]: must be finite'),
+    ({'tolerate': ['panda_joint1', 'elbow']},
+     r"tolerate\[1\]: unknown joint 'elbow' \(joints: panda_joint1"),
+    ({'tolerate': ['panda_joint1', 'panda_joint1']}, r'tolerate: names a joint twice'),
+    ({'tolerate': []}, r'tolerate: names no joint'),
+    ({'tolerate': 'panda_joint1'}, r'tolerate: must be a list'),
+    ({'robot': {'type': 'urdf', 'file': '../robots/panda.urdf', 'tip_link': 'panda_hand_tcp',
+                'disabled_collisions': [['panda_link0', 'panda_link1'],
+                                        ['panda_link1', 'panda_finger']]}},
+     r"robot\.disabled_collisions\[1\]: unknown link 'panda_finger'"),
+    ({'robot': {'type': 'urdf', 'file': '../robots/panda.urdf', 'tip_link': 'panda_hand_tcp',
+                'disabled_collisions': [['panda_link0']]}},
+     r'robot\.disabled_collisions\[0\]: must be two link names'),
+    ({'robot': {'type': 'urdf', 'file': '../robots/nope.urdf', 'tip_link': 'panda_hand_tcp'}},
+     r'robot\.file: cannot read .*nope\.urdf'),
+    ({'robot': {'type': 'urdf', 'file': '../robots/panda.urdf', 'tip_link': 'panda_hand_tcp',
+                'tip_offset': [0.0, 0.1]}},
+     r'robot\.tip_offset: needs 3 values'),
+    ({'robot': {'type': 'urdf', 'file': '../robots/panda.urdf'}}, r'robot\.tip_link: is missing'),
+    ({'robot': {'type': 'urdf', 'file': '../robots/panda.urdf', 'tip_link': 7}},
+     r'robot\.tip_link: must be a link name'),
+])
+def test_bad_spatial_input_names_its_field(changes, field):
+    with pytest.raises(InputError, match=field) as error:
+        panda(**changes)
+    assert '\n' not in str(error.value)
+
+
+def test_a_planar_arm_takes_planar_points_only():
+    data = with_change(('task', 'goal'), {'position': [1.0, 0.0, 0.0],
+                                          'orientation': [0.0, 0.0, 0.0, 1.0]})
+    with pytest.raises(InputError, match=r'task\.goal: a planar arm takes \[x, y\]'):
+        parse_scene(data)
+    assert isinstance(parse_scene(GOOD).robot, PlanarChain)

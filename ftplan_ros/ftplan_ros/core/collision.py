@@ -193,16 +193,21 @@ class CollisionChecker:
         """
         frame = self.robot.frame_lever_arms()
         n = self.robot.n_joints
+        turns = self._turns()
         shape_arms = np.zeros((len(self._items), n))
         for k, (item, link) in enumerate(zip(self._items, self._links, strict=True)):
-            shape_arms[k, :link] = frame[link, :link] + _extent(item)
+            shape_arms[k] = np.where(turns[link], frame[link] + _extent(item), 0.0)
         rows = [shape_arms[:self._moving]]
         for s, t in self._shape_pairs:
             a, b = self._links[s], self._links[t]
-            row = np.zeros(n)
-            row[a:b] = shape_arms[t, a:b]
-            rows.append(row[None, :])
+            rows.append(np.where(turns[b] & ~turns[a], shape_arms[t], 0.0)[None, :])
         return np.concatenate(rows).reshape(-1, n)
+
+    def _turns(self) -> np.ndarray:
+        """(L, n) bool: whether joint a turns link j (`Robot.joint_chain_index`)."""
+        chain = np.asarray(self.robot.joint_chain_index)
+        links = len(self.robot.link_names)
+        return chain[None, :] < np.arange(links)[:, None]
 
     def clearance(self, thetas: np.ndarray, needed: np.ndarray | float = np.inf,
                   refine: bool = True) -> np.ndarray:
@@ -302,8 +307,16 @@ class CollisionChecker:
         """Drop obstacles beyond the arm's reach + CULL_DISTANCE; return the kept and the cap."""
         if not len(obstacles) or not self._moving:
             return obstacles, np.inf
-        origin = self.robot.link_frames(np.zeros(self.robot.n_joints))[1, :3, 3]
-        reach = float(self.lever_arms()[:self._moving, 0].max()) + 1e-9
+        # Every moving shape a joint turns lies within its arm from the first joint's origin;
+        # the others stand still, as far from it as they are at any configuration.
+        frames = self.robot.link_frames(np.zeros(self.robot.n_joints))
+        origin = frames[int(self.robot.joint_chain_index[0]) + 1, :3, 3]
+        reaches = self.lever_arms()[:self._moving, 0]
+        for k in np.flatnonzero(~self._turns()[self._links[:self._moving], 0]):
+            centre, radius = self._items[k].shape.bounding_sphere()
+            pose = frames[self._links[k]] @ self._items[k].placement
+            reaches[k] = np.linalg.norm(pose[:3, :3] @ centre + pose[:3, 3] - origin) + radius
+        reach = float(reaches.max()) + 1e-9
         probe = _Shapes([Shape('sphere', radius=reach)])
         pose = np.eye(4)
         pose[:3, 3] = origin
@@ -385,7 +398,10 @@ def _certified(first: fcl.CollisionObject, a: Shape, a_pose, second: fcl.Collisi
     """Lower bound [m] on the distance between two posed shapes from fcl's nearest points.
 
     0 when fcl finds contact (of the padded shapes): the penetration depth is never
-    needed, only that the clearance is not positive.
+    needed, only that the clearance is not positive. python-fcl gives the nearest points
+    of some pairs (a mesh and a sphere) in each object's own frame rather than the
+    world's, so both readings are tried: any direction gives a valid bound, the better
+    one is kept.
     """
     request = fcl.DistanceRequest(enable_nearest_points=True,
                                   gjk_solver_type=fcl.GJKSolverType.GST_INDEP)
@@ -393,8 +409,10 @@ def _certified(first: fcl.CollisionObject, a: Shape, a_pose, second: fcl.Collisi
     if fcl.distance(first, second, request, result) <= 0.0:
         return 0.0
     near_a, near_b = (np.asarray(p, dtype=float) for p in result.nearest_points)
-    direction = near_b - near_a
-    norm = float(np.linalg.norm(direction))
-    if norm == 0.0:
-        return 0.0
-    return separation(a, a_pose, b, b_pose, direction / norm)
+    best = 0.0
+    for direction in (near_b - near_a,
+                      (b_pose[0] @ near_b + b_pose[1]) - (a_pose[0] @ near_a + a_pose[1])):
+        norm = float(np.linalg.norm(direction))
+        if norm > 0.0:
+            best = max(best, separation(a, a_pose, b, b_pose, direction / norm))
+    return best

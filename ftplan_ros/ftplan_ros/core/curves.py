@@ -75,6 +75,11 @@ class FrozenJoints:
         return len(self.free)
 
     @property
+    def joint_chain_index(self) -> np.ndarray:
+        """(n',) the free joints' places in the whole chain."""
+        return np.asarray(self.robot.joint_chain_index)[self.free]
+
+    @property
     def task_kind(self) -> str:
         """The whole robot's task kind."""
         return self.robot.task_kind

@@ -23,6 +23,7 @@ from .robot import task_errors
 from .scene import Scene
 
 SAMPLE_STEP = 0.002  # [rad] largest joint step between the drill's collision samples
+MOTION_STEP = 0.04  # [rad] largest joint step between the points of a drilled motion
 EXACT_BELOW = 0.02  # [m] clearances reported exactly below this, as lower bounds above
 
 
@@ -63,13 +64,15 @@ def drilled_motion(result: PlanResult, joint: int, progress: float,
     """Return a drill's motion (k, n) [rad], the index where the joint locked, its value [rad].
 
     The arm follows the nominal path for `progress` (0..1) of its length, `joint` locks
-    there, and `recover` gives the rest. None when there is no recovery path.
+    there, and `recover` gives the rest. Points are at most MOTION_STEP apart in every
+    joint. None when there is no recovery path.
     """
-    before = path_until(result.nominal_path, progress)
+    before = densify(path_until(result.nominal_path, progress), MOTION_STEP)
     rescue = recover(result.surface, before[-1], joint)
     if rescue is None:
         return None
-    return np.vstack([before, rescue.path[1:]]), len(before) - 1, rescue.locked_value
+    return (np.vstack([before, densify(rescue.path, MOTION_STEP)[1:]]), len(before) - 1,
+            rescue.locked_value)
 
 
 def drill_once(scene: Scene, result: PlanResult, checker: CollisionChecker, joint: int,

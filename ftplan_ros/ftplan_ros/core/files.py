@@ -56,7 +56,7 @@ def read_text(path: str | Path, where: str) -> str:
     try:
         if not path.is_file():
             raise InputError(where, 'is not a regular file' if path.exists()
-                             else f'cannot read {path} (no such file)')
+                             else f'cannot read {path.name} (no such file)')
         size = path.stat().st_size
         if size > LARGEST_FILE:
             raise InputError(where, f'{path.name} is {size} bytes, more than the '

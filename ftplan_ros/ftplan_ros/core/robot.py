@@ -27,7 +27,9 @@ class Robot(Protocol):
     """What the planner needs to know about an arm bound to a kind of task.
 
     Joints are revolute, numbered 0..n-1 from the base. Links are numbered 0..L-1: link
-    0 is the base (it never moves) and link j >= 1 is turned by joints 0..j-1.
+    0 is the base (it never moves) and link j >= 1 is turned by the joints whose
+    `joint_chain_index` is below j (joints 0..j-1 of a whole chain; a chain with frozen
+    joints skips them).
     """
 
     joint_names: tuple[str, ...]
@@ -35,6 +37,10 @@ class Robot(Protocol):
     @property
     def n_joints(self) -> int:
         """Number of joints n."""
+
+    @property
+    def joint_chain_index(self) -> np.ndarray:
+        """(n,) int: each joint's place in the chain; joint a turns link j when index < j."""
 
     @property
     def task_kind(self) -> str:
@@ -175,6 +181,11 @@ class PlanarChain:
         lengths = np.asarray(self.link_lengths)
         return np.stack([np.sum(lengths * np.cos(phi), axis=-1),
                          np.sum(lengths * np.sin(phi), axis=-1)], axis=-1)
+
+    @property
+    def joint_chain_index(self) -> np.ndarray:
+        """(n,) 0..n-1: joint a turns links a+1..n."""
+        return np.arange(self.n_joints)
 
     @property
     def task_kind(self) -> str:

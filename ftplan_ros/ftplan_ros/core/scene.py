@@ -73,6 +73,10 @@ class Obstacle:
                 raise InputError(f'obstacle.{name}', f'must be > 0, got {getattr(self, name)}')
 
 
+class MissingRobotError(InputError):
+    """A scene without a robot was loaded without one to put in it."""
+
+
 DEFAULT_GOAL_TOLERANCE = 0.01  # [m]
 DEFAULT_ORIENTATION_TOLERANCE = 0.01  # [rad]
 _KIND_OF_SIZE = {size: kind for kind, size in POINT_SIZE.items()}
@@ -167,8 +171,8 @@ def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None,
             robot_data, directory = _robot_file(directory / robot_data)
         robot = parse_robot(robot_data, directory)
     elif robot is None:
-        raise InputError('robot', 'is missing: give the robot in the scene (the nodes can '
-                         'take it from /robot_description instead)')
+        raise MissingRobotError('robot', 'is missing: give the robot in the scene (the nodes can '
+                           'take it from /robot_description instead)')
     frame_id = data.get('frame_id', 'base_link')
     if not isinstance(frame_id, str) or not frame_id:
         raise InputError('frame_id', 'must be a non-empty string')

@@ -47,6 +47,11 @@ class SpatialArm:
         return self.model.n_joints
 
     @property
+    def joint_chain_index(self) -> np.ndarray:
+        """(n,) 0..n-1: joint a turns links a+1..n."""
+        return np.arange(self.n_joints)
+
+    @property
     def task_dim(self) -> int:
         """m: 3 for positions, 5 for a tool axis, 6 for poses."""
         return TASK_DIM[self.task_kind]

@@ -239,12 +239,13 @@ class SurfaceSearch:
             sets = ' or '.join(', '.join(names[j] for j in joints) for joints in options[:3])
             reason = ('no candidate θ_s passes the necessary condition for every joint at '
                       f'once: the starts nearest to it miss the failure planes of {sets}')
-        goal = np.vstack(arc_points)
         for j in options[0] if everywhere else ():
-            if np.ptp(goal[:, j]) < 1e-6:
-                reason += (f'. {names[j]} keeps the same angle, {goal[0, j]:.4f} rad, along the '
-                           'whole goal self-motion (a spherical shoulder and wrist fix the '
-                           'elbow for a pose): locked anywhere else it can never reach the goal')
+            if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
+                angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
+                reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
+                           f'self-motion ({", ".join(map(str, angles))} rad: a spherical '
+                           'shoulder and wrist fix the elbow for a pose): locked at any other '
+                           'angle it can never reach the goal')
         return reason
 
     def _given_start(self, theta: np.ndarray) -> np.ndarray:

@@ -24,6 +24,7 @@ from .robot import LinkShape
 _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
                'JointModelRevoluteUnboundedUnaligned')
+_PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
 
 
 def chain_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
@@ -56,7 +57,7 @@ def chain_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     for joint in path:
         kind = model.joints[joint].shortname()
         if kind not in _REVOLUTE + _CONTINUOUS:
-            what = 'prismatic' if 'JointModelP' in kind else 'floating or multi-axis'
+            what = 'prismatic' if kind in _PRISMATIC else 'floating or multi-axis'
             raise InputError(f'{where}.file', f'joint {model.names[joint]!r} between '
                              f'{base_link!r} and {tip_link!r} is {what} ({kind}): only '
                              'revolute and continuous joints are supported')

@@ -23,6 +23,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import String
 
 from ftplan_ros.core import InputError, Scene, load_scene, robot_from_urdf
+from ftplan_ros.core.scene import MissingRobotError
 
 from .params import array_parameter, declare, declare_array, default_scene_file
 from .qos import LATCHED_QOS
@@ -34,7 +35,7 @@ WAITING = f'waiting for {ROBOT_DESCRIPTION}: the scene file has no robot'
 
 def robot_is_missing(error: InputError) -> bool:
     """Whether `load_scene` failed only because the scene file has no robot."""
-    return error.field == 'robot' and error.problem.startswith('is missing')
+    return isinstance(error, MissingRobotError)
 
 
 class SceneSource:
