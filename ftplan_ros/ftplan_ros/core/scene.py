@@ -27,11 +27,9 @@ from .self_collision import default_disabled_pairs
 from .spatial import SpatialArm
 from .task_space import POINT_SIZE, unit_vector
 from .urdf import chain_from_urdf
+from .validation import LARGEST_NUMBER, check_keys, mapping, number, sequence, vector
 
 OBSTACLE_TYPES = ('sphere', 'box', 'cylinder')
-# [m or rad] Largest magnitude of any number: the clearance bounds allow for float rounding
-# of about 1e-6 m, which holds for coordinates up to here (and a scene is not bigger).
-LARGEST_NUMBER = 1.0e6
 # [rad] Widest joint limit: a joint that turns further has no limit (it wraps).
 LARGEST_JOINT_ANGLE = 2.0 * math.pi
 
@@ -161,8 +159,8 @@ def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None,
     file that names it. A scene without one takes the `robot` argument (the nodes build
     it from /robot_description).
     """
-    data = _mapping(data, 'scene')
-    _check_keys(data, 'scene', required=(),
+    data = mapping(data, 'scene')
+    check_keys(data, 'scene', required=(),
                 optional=('robot', 'obstacles', 'task', 'frame_id', 'tolerate'))
     directory = Path(directory or '.')
     if 'robot' in data:
@@ -178,7 +176,7 @@ def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None,
         raise InputError('frame_id', 'must be a non-empty string')
     obstacles = tuple(
         parse_obstacle(item, f'obstacles[{k}]')
-        for k, item in enumerate(_sequence(data.get('obstacles') or [], 'obstacles')))
+        for k, item in enumerate(sequence(data.get('obstacles') or [], 'obstacles')))
     scene = Scene(robot, obstacles, None, frame_id, name,
                   parse_tolerated(data.get('tolerate'), robot.joint_names))
     return scene if data.get('task') is None else scene.with_task(parse_task(data['task'], robot))
@@ -189,7 +187,7 @@ def parse_tolerated(data: Any, joint_names: Sequence[str], where: str = 'tolerat
     """Validate a list of joint names whose locks a plan must survive (None: all joints)."""
     if data is None:
         return None
-    names = _sequence(data, where)
+    names = sequence(data, where)
     if not names:
         raise InputError(where, 'names no joint: leave it out to tolerate every joint')
     for k, joint in enumerate(names):
@@ -203,8 +201,8 @@ def parse_tolerated(data: Any, joint_names: Sequence[str], where: str = 'tolerat
 
 def _robot_file(path: Path) -> tuple[Any, Path]:
     data = load_yaml(read_text(path, 'robot'), f'robot file {path.name}')
-    data = _mapping(data, f'robot file {path.name}')
-    _check_keys(data, f'robot file {path.name}', required=('robot',), optional=())
+    data = mapping(data, f'robot file {path.name}')
+    check_keys(data, f'robot file {path.name}', required=('robot',), optional=())
     return data['robot'], path.parent
 
 
@@ -214,7 +212,7 @@ def parse_robot(data: Any, directory: Path | None = None) -> Robot:
     A spatial robot comes bound to pose tasks; `Scene.with_task` rebinds it to the task's
     kind.
     """
-    data = _mapping(data, 'robot')
+    data = mapping(data, 'robot')
     kind = data.get('type')
     if kind == 'planar':
         return _planar_robot(data)
@@ -226,9 +224,9 @@ def parse_robot(data: Any, directory: Path | None = None) -> Robot:
 
 
 def _planar_robot(data: Mapping) -> PlanarChain:
-    _check_keys(data, 'robot', required=('type', 'link_lengths'),
+    check_keys(data, 'robot', required=('type', 'link_lengths'),
                 optional=('link_radius', 'joint_names', 'joint_limits'))
-    lengths = _vector(data['link_lengths'], 'robot.link_lengths')
+    lengths = vector(data['link_lengths'], 'robot.link_lengths')
     if not lengths:
         raise InputError('robot.link_lengths', 'needs at least one link')
     for k, value in enumerate(lengths):
@@ -239,7 +237,7 @@ def _planar_robot(data: Mapping) -> PlanarChain:
     names = _joint_names(data.get('joint_names'), n)
     limits = data.get('joint_limits')
     if limits is not None:
-        limits = _sequence(limits, 'robot.joint_limits')
+        limits = sequence(limits, 'robot.joint_limits')
         if len(limits) != n:
             raise InputError('robot.joint_limits', f'has {len(limits)} entries for {n} joints')
         limits = tuple(_joint_limit(item, f'robot.joint_limits[{k}]')
@@ -248,7 +246,7 @@ def _planar_robot(data: Mapping) -> PlanarChain:
 
 
 def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
-    _check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
+    check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
                 optional=('base_link', 'tip_offset', 'disabled_collisions'))
     if not isinstance(data['file'], str) or not data['file']:
         raise InputError('robot.file', 'must be the path of a URDF file')
@@ -261,19 +259,19 @@ def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
 
 
 def _dh_chain(data: Mapping) -> ChainModel:
-    _check_keys(data, 'robot', required=('type', 'rows'),
+    check_keys(data, 'robot', required=('type', 'rows'),
                 optional=('link_radius', 'joint_names', 'tip_offset', 'disabled_collisions'))
     rows = []
-    for k, row in enumerate(_sequence(data['rows'], 'robot.rows')):
+    for k, row in enumerate(sequence(data['rows'], 'robot.rows')):
         where = f'robot.rows[{k}]'
-        row = _mapping(row, where)
-        _check_keys(row, where, required=('a', 'alpha', 'd'), optional=('offset', 'limits'))
-        values = {key: _number(row.get(key, 0.0), f'{where}.{key}')
+        row = mapping(row, where)
+        check_keys(row, where, required=('a', 'alpha', 'd'), optional=('offset', 'limits'))
+        values = {key: number(row.get(key, 0.0), f'{where}.{key}')
                   for key in ('a', 'alpha', 'd', 'offset')}
         rows.append(DHRow(**values, limits=_joint_limit(row.get('limits'), f'{where}.limits')))
     if not rows:
         raise InputError('robot.rows', 'needs at least one joint')
-    offset = _vector(data.get('tip_offset', [0.0, 0.0, 0.0]), 'robot.tip_offset', length=3)
+    offset = vector(data.get('tip_offset', [0.0, 0.0, 0.0]), 'robot.tip_offset', length=3)
     model = chain_from_dh(rows, _joint_names(data.get('joint_names'), len(rows)),
                           _link_radius(data), offset)
     return with_disabled_collisions(model, data.get('disabled_collisions'))
@@ -291,7 +289,7 @@ def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     for key, value in (('tip_link', tip_link), ('base_link', base_link)):
         if value is not None and (not isinstance(value, str) or not value):
             raise InputError(f'robot.{key}', 'must be a link name')
-    offset = _vector(list(tip_offset), 'robot.tip_offset', length=3)
+    offset = vector(list(tip_offset), 'robot.tip_offset', length=3)
     model = chain_from_urdf(xml, tip_link, base_link, offset, mesh_dirs=mesh_dirs)
     return SpatialArm(with_disabled_collisions(model, disabled_collisions), task_kind)
 
@@ -305,8 +303,8 @@ def with_disabled_collisions(model: ChainModel, data: Any) -> ChainModel:
     if data is None:
         return replace(model, disabled_pairs=default_disabled_pairs(model))
     pairs = set()
-    for k, pair in enumerate(_sequence(data, 'robot.disabled_collisions')):
-        names = _sequence(pair, f'robot.disabled_collisions[{k}]')
+    for k, pair in enumerate(sequence(data, 'robot.disabled_collisions')):
+        names = sequence(pair, f'robot.disabled_collisions[{k}]')
         if len(names) != 2:
             raise InputError(f'robot.disabled_collisions[{k}]', 'must be two link names')
         indices = []
@@ -320,7 +318,7 @@ def with_disabled_collisions(model: ChainModel, data: Any) -> ChainModel:
 
 
 def _link_radius(data: Mapping) -> float:
-    radius = _number(data.get('link_radius', 0.0), 'robot.link_radius')
+    radius = number(data.get('link_radius', 0.0), 'robot.link_radius')
     if radius < 0.0:
         raise InputError('robot.link_radius', f'must be >= 0, got {radius}')
     return radius
@@ -328,7 +326,7 @@ def _link_radius(data: Mapping) -> float:
 
 def _joint_names(names: Any, n: int) -> list[str]:
     names = [f'joint{k + 1}' for k in range(n)] if names is None else names
-    names = _sequence(names, 'robot.joint_names')
+    names = sequence(names, 'robot.joint_names')
     if len(names) != n:
         raise InputError('robot.joint_names', f'has {len(names)} names for {n} joints')
     for k, joint in enumerate(names):
@@ -341,7 +339,7 @@ def _joint_names(names: Any, n: int) -> list[str]:
 
 def parse_obstacle(data: Any, where: str) -> Obstacle:
     """Validate one obstacle mapping; `where` names it in errors (e.g. `obstacles[0]`)."""
-    data = _mapping(data, where)
+    data = mapping(data, where)
     shape = data.get('type')
     if shape not in OBSTACLE_TYPES:
         raise InputError(f'{where}.type', f'must be one of {", ".join(OBSTACLE_TYPES)}, '
@@ -349,12 +347,12 @@ def parse_obstacle(data: Any, where: str) -> Obstacle:
     per_shape = {'sphere': ('radius',), 'box': ('size', 'rpy'),
                  'cylinder': ('radius', 'length', 'rpy')}
     required = {'sphere': ('radius',), 'box': ('size',), 'cylinder': ('radius',)}[shape]
-    _check_keys(data, where, required=('type', 'center') + required,
+    check_keys(data, where, required=('type', 'center') + required,
                 optional=tuple(k for k in per_shape[shape] if k not in required))
     center = _point3(data['center'], f'{where}.center')
-    rpy = tuple(_vector(data.get('rpy', [0.0, 0.0, 0.0]), f'{where}.rpy', length=3))
+    rpy = tuple(vector(data.get('rpy', [0.0, 0.0, 0.0]), f'{where}.rpy', length=3))
     if shape == 'box':
-        size = _vector(data['size'], f'{where}.size')
+        size = vector(data['size'], f'{where}.size')
         if len(size) not in (2, 3):
             raise InputError(f'{where}.size', f'needs 2 or 3 values, got {len(size)}')
         size = size + [1.0] * (3 - len(size))  # planar boxes get a unit height
@@ -362,12 +360,12 @@ def parse_obstacle(data: Any, where: str) -> Obstacle:
             if value <= 0.0:
                 raise InputError(f'{where}.size[{k}]', f'must be > 0, got {value}')
         return Obstacle('box', center, size=tuple(size), rpy=rpy)
-    radius = _number(data['radius'], f'{where}.radius')
+    radius = number(data['radius'], f'{where}.radius')
     if radius <= 0.0:
         raise InputError(f'{where}.radius', f'must be > 0, got {radius}')
     if shape == 'sphere':
         return Obstacle('sphere', center, radius=radius)
-    length = _number(data.get('length', 1.0), f'{where}.length')
+    length = number(data.get('length', 1.0), f'{where}.length')
     if length <= 0.0:
         raise InputError(f'{where}.length', f'must be > 0, got {length}')
     return Obstacle('cylinder', center, radius=radius, length=length, rpy=rpy)
@@ -375,18 +373,18 @@ def parse_obstacle(data: Any, where: str) -> Obstacle:
 
 def parse_task(data: Any, robot: Robot) -> Task:
     """Validate the `task` section; its form sets the kind (see the module docstring)."""
-    data = _mapping(data, 'task')
-    _check_keys(data, 'task', required=('start', 'goal'),
+    data = mapping(data, 'task')
+    check_keys(data, 'task', required=('start', 'goal'),
                 optional=('goal_tolerance', 'orientation_tolerance'))
     start = parse_task_point(data['start'], 'task.start', robot)
     goal = parse_task_point(data['goal'], 'task.goal', robot)
     if len(start) != len(goal):
         raise InputError('task.goal', 'must have the same form as task.start')
-    tolerance = _number(data.get('goal_tolerance', DEFAULT_GOAL_TOLERANCE),
+    tolerance = number(data.get('goal_tolerance', DEFAULT_GOAL_TOLERANCE),
                         'task.goal_tolerance')
     if tolerance <= 0.0:
         raise InputError('task.goal_tolerance', f'must be > 0, got {tolerance}')
-    angle = _number(data.get('orientation_tolerance', DEFAULT_ORIENTATION_TOLERANCE),
+    angle = number(data.get('orientation_tolerance', DEFAULT_ORIENTATION_TOLERANCE),
                     'task.orientation_tolerance')
     if angle <= 0.0:
         raise InputError('task.orientation_tolerance', f'must be > 0, got {angle}')
@@ -401,17 +399,17 @@ def parse_task_point(data: Any, where: str, robot: Robot) -> tuple[float, ...]:
     """
     planar = isinstance(robot, PlanarChain)
     if not isinstance(data, Mapping):
-        point = _vector(data, where, length=2 if planar else 3)
+        point = vector(data, where, length=2 if planar else 3)
         return tuple(point)
     if planar:
         raise InputError(where, 'a planar arm takes [x, y]')
-    _check_keys(data, where, required=('position',), optional=('orientation', 'axis'))
-    position = _vector(data['position'], f'{where}.position', length=3)
+    check_keys(data, where, required=('position',), optional=('orientation', 'axis'))
+    position = vector(data['position'], f'{where}.position', length=3)
     if ('orientation' in data) == ('axis' in data):
         raise InputError(where, 'needs exactly one of orientation (a pose) or axis (a tool '
                          'axis); give [x, y, z] for a position')
     key = 'orientation' if 'orientation' in data else 'axis'
-    values = _vector(data[key], f'{where}.{key}', length=4 if key == 'orientation' else 3)
+    values = vector(data[key], f'{where}.{key}', length=4 if key == 'orientation' else 3)
     try:
         unit = unit_vector(values, 'a quaternion' if key == 'orientation' else 'an axis')
     except ValueError as error:
@@ -460,7 +458,7 @@ def _obstacle_to_dict(obstacle: Obstacle) -> dict:
 def _joint_limit(data: Any, where: str) -> tuple[float, float] | None:
     if data is None:
         return None
-    low, high = _vector(data, where, length=2)
+    low, high = vector(data, where, length=2)
     if not low < high:
         raise InputError(where, f'lower limit {low} must be below upper limit {high}')
     if max(abs(low), abs(high)) > LARGEST_JOINT_ANGLE:
@@ -469,51 +467,8 @@ def _joint_limit(data: Any, where: str) -> tuple[float, float] | None:
     return (low, high)
 
 
-def _mapping(data: Any, where: str) -> Mapping:
-    if not isinstance(data, Mapping):
-        raise InputError(where, f'must be a mapping, got {type(data).__name__}')
-    return data
-
-
-def _sequence(data: Any, where: str) -> list:
-    if isinstance(data, (str, bytes)) or not isinstance(data, Sequence):
-        raise InputError(where, f'must be a list, got {type(data).__name__}')
-    return list(data)
-
-
-def _check_keys(data: Mapping, where: str, required: tuple, optional: tuple) -> None:
-    for key in data:
-        if key not in required and key not in optional:
-            allowed = ', '.join(required + optional)
-            raise InputError(f'{where}.{key}', f'unknown key (allowed: {allowed})')
-    for key in required:
-        if key not in data:
-            raise InputError(f'{where}.{key}', 'is missing')
-
-
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(where, f'must be a number, got {value!r}')
-    try:
-        value = float(value)
-    except OverflowError:
-        value = math.inf
-    if not math.isfinite(value):
-        raise InputError(where, f'must be finite, got {value}')
-    if abs(value) > LARGEST_NUMBER:
-        raise InputError(where, f'must be within ±{LARGEST_NUMBER:g}, got {value:g}')
-    return value
-
-
-def _vector(data: Any, where: str, length: int | None = None) -> list[float]:
-    items = _sequence(data, where)
-    if length is not None and len(items) != length:
-        raise InputError(where, f'needs {length} values, got {len(items)}')
-    return [_number(item, f'{where}[{k}]') for k, item in enumerate(items)]
-
-
 def _point3(data: Any, where: str) -> tuple[float, float, float]:
-    values = _vector(data, where)
+    values = vector(data, where)
     if len(values) not in (2, 3):
         raise InputError(where, f'needs 2 or 3 values, got {len(values)}')
     return tuple(values + [0.0] * (3 - len(values)))

@@ -30,7 +30,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -48,6 +47,7 @@ from ..core import (
     scene_to_dict,
 )
 from ..core.files import load_yaml, read_text
+from ..core.validation import check_keys, integer, mapping, number
 
 METHODS = ('paper_surface',)   # the planner's algorithm; more come with later planners
 AXES = ('x', 'y', 'z')
@@ -230,15 +230,15 @@ def load_study(path: str | Path) -> Study:
 
 def parse_study(data: Any, name: str = 'study', directory: Path | None = None) -> Study:
     """Validate a spec given as plain data; `directory` is where its scene path starts."""
-    data = _mapping(data, 'study')
-    _check_keys(data, 'study', required=('scene', 'vary'), optional=('planner', 'chunk'))
+    data = mapping(data, 'study')
+    check_keys(data, 'study', required=('scene', 'vary'), optional=('planner', 'chunk'))
     scene = _scene(data['scene'], Path(directory or '.'))
     if scene.robot.task_dim not in (2, 3):
         # Axis and pose tasks hold an orientation too: varying them is for later.
         raise InputError('scene', f'studies vary planar and 3-D position tasks; this robot\'s '
                          f'tasks have {scene.robot.task_dim} components')
-    vary = _mapping(data['vary'], 'vary')
-    _check_keys(vary, 'vary', required=(), optional=('start', 'goal', 'random'))
+    vary = mapping(data['vary'], 'vary')
+    check_keys(vary, 'vary', required=(), optional=('start', 'goal', 'random'))
     if len(vary) != 1:
         raise InputError('vary', 'needs exactly one of start (a map), goal (a map) or random '
                          f'(a sweep), got {", ".join(vary) or "none"}')
@@ -250,7 +250,7 @@ def parse_study(data: Any, name: str = 'study', directory: Path | None = None) -
     if varied.tasks > MAX_TASKS:
         raise InputError(f'vary.{kind}', f'{varied.tasks} tasks: at most {MAX_TASKS} per study')
     planner = _planner(data.get('planner') or {})
-    chunk = _integer(data.get('chunk', DEFAULT_CHUNK), 'chunk', least=1)
+    chunk = integer(data.get('chunk', DEFAULT_CHUNK), 'chunk', least=1)
     return Study(name, scene, varied, planner, chunk)
 
 
@@ -284,12 +284,12 @@ def _grid(data: Any, where: str, endpoint: str, scene: Scene) -> PositionGrid:
 def _axis_span(value: Any, where: str) -> tuple[float, float, int]:
     """(low, high, count) of a map axis: [low, high, count] or one number."""
     if not isinstance(value, list):
-        value = _number(value, where)
+        value = number(value, where)
         return (value, value, 1)
     if len(value) != 3:
         raise InputError(where, f'needs [low, high, count] or one number, got {len(value)} values')
-    low, high = (_number(v, f'{where}[{k}]') for k, v in enumerate(value[:2]))
-    count = _integer(value[2], f'{where}[2]', least=1)
+    low, high = (number(v, f'{where}[{k}]') for k, v in enumerate(value[:2]))
+    count = integer(value[2], f'{where}[2]', least=1)
     if high < low:
         raise InputError(where, f'low {low} is above high {high}')
     if count == 1 and high != low:
@@ -299,10 +299,10 @@ def _axis_span(value: Any, where: str) -> tuple[float, float, int]:
 
 def _random_tasks(data: Any, scene: Scene) -> RandomTasks:
     where = 'vary.random'
-    data = _mapping(data, where)
-    _check_keys(data, where, required=('tasks',), optional=('seed', 'start', 'goal', 'obstacles'))
-    tasks = _integer(data['tasks'], f'{where}.tasks', least=1)
-    seed = _integer(data.get('seed', 0), f'{where}.seed', least=0)
+    data = mapping(data, where)
+    check_keys(data, where, required=('tasks',), optional=('seed', 'start', 'goal', 'obstacles'))
+    tasks = integer(data['tasks'], f'{where}.tasks', least=1)
+    seed = integer(data.get('seed', 0), f'{where}.seed', least=0)
     dim = scene.robot.task_dim
     start, goal = (None if data.get(k) is None else _region(data[k], f'{where}.{k}', dim)
                    for k in ('start', 'goal'))
@@ -316,9 +316,9 @@ def _random_tasks(data: Any, scene: Scene) -> RandomTasks:
 
 
 def _random_obstacles(data: Any, where: str, scene: Scene) -> RandomObstacles:
-    data = _mapping(data, where)
-    _check_keys(data, where, required=('count', 'radius'), optional=('region',))
-    count = _range(data['count'], f'{where}.count', integer=True)
+    data = mapping(data, where)
+    check_keys(data, where, required=('count', 'radius'), optional=('region',))
+    count = _range(data['count'], f'{where}.count', whole=True)
     if count[0] < 0 or count[1] > MAX_OBSTACLES:
         raise InputError(f'{where}.count', f'must lie in [0, {MAX_OBSTACLES}], got {list(count)}')
     radius = _range(data['radius'], f'{where}.radius')
@@ -334,9 +334,9 @@ def _random_obstacles(data: Any, where: str, scene: Scene) -> RandomObstacles:
 
 
 def _region(data: Any, where: str, dim: int) -> Region:
-    data = _mapping(data, where)
+    data = mapping(data, where)
     if 'radius' in data:
-        _check_keys(data, where, required=('radius',), optional=())
+        check_keys(data, where, required=('radius',), optional=())
         radius = _range(data['radius'], f'{where}.radius')
         if radius[0] < 0.0:
             raise InputError(f'{where}.radius', f'must be >= 0, got {radius[0]}')
@@ -346,10 +346,10 @@ def _region(data: Any, where: str, dim: int) -> Region:
 
 
 def _planner(data: Any) -> PlannerSettings:
-    data = _mapping(data, 'planner')
-    _check_keys(data, 'planner', required=(), optional=('seed', 'margin', 'method'))
-    seed = _integer(data.get('seed', 0), 'planner.seed', least=0)
-    margin = _number(data.get('margin', 0.0), 'planner.margin')
+    data = mapping(data, 'planner')
+    check_keys(data, 'planner', required=(), optional=('seed', 'margin', 'method'))
+    seed = integer(data.get('seed', 0), 'planner.seed', least=0)
+    margin = number(data.get('margin', 0.0), 'planner.margin')
     if margin < 0.0:
         raise InputError('planner.margin', f'must be >= 0, got {margin}')
     method = data.get('method', METHODS[0])
@@ -406,7 +406,7 @@ def _region_to_dict(region: Region | None) -> dict | None:
 
 def _axes(data: Any, where: str, dim: int, also: str | None = None) -> dict:
     """Return the axes of a position (x, y for m = 2; x, y, z for m = 3), in order."""
-    data = _mapping(data, where)
+    data = mapping(data, where)
     wanted = AXES[:dim]
     for key in data:
         if key not in wanted:
@@ -419,9 +419,9 @@ def _axes(data: Any, where: str, dim: int, also: str | None = None) -> dict:
     return {key: data[key] for key in wanted}
 
 
-def _range(value: Any, where: str, integer: bool = False) -> tuple:
-    """[low, high] (or one number for low == high), low <= high."""
-    read = (lambda v, w: _integer(v, w)) if integer else _number
+def _range(value: Any, where: str, whole: bool = False) -> tuple:
+    """[low, high] (or one number for low == high), low <= high; `whole`: integers."""
+    read = integer if whole else number
     if not isinstance(value, list):
         value = read(value, where)
         return (value, value)
@@ -433,37 +433,3 @@ def _range(value: Any, where: str, integer: bool = False) -> tuple:
     return (low, high)
 
 
-def _mapping(data: Any, where: str) -> Mapping:
-    if not isinstance(data, Mapping):
-        raise InputError(where, f'must be a mapping, got {type(data).__name__}')
-    return data
-
-
-def _check_keys(data: Mapping, where: str, required: tuple, optional: tuple) -> None:
-    for key in data:
-        if key not in required and key not in optional:
-            raise InputError(f'{where}.{key}',
-                             f'unknown key (allowed: {", ".join(required + optional)})')
-    for key in required:
-        if key not in data:
-            raise InputError(f'{where}.{key}', 'is missing')
-
-
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(where, f'must be a number, got {value!r}')
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf
-    if not math.isfinite(number):
-        raise InputError(where, f'must be finite, got {value!r}')
-    return number
-
-
-def _integer(value: Any, where: str, least: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(where, f'must be an integer, got {value!r}')
-    if least is not None and value < least:
-        raise InputError(where, f'must be an integer >= {least}, got {value}')
-    return value
