@@ -358,7 +358,8 @@ def _channel_minima(bounds: np.ndarray, exact: np.ndarray, channel_of: np.ndarra
     for c in range(channels):
         if len(members[c]):
             out[:, c] = bounds[:, members[c]].min(axis=1)
-    for n, c in np.argwhere(out < needed):
+    has_loose = np.array([bool((~exact[m]).any()) for m in members], dtype=bool)
+    for n, c in np.argwhere((out < needed) & has_loose[None, :]):
         values = bounds[n, members[c]]
         loose = ~exact[members[c]]
         best = values[~loose].min(initial=np.inf)

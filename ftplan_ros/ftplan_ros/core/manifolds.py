@@ -38,7 +38,7 @@ class ManifoldOptions:
     max_turn: float = 0.3  # largest tangent turn [rad] accepted in one step
     tolerance: float = 1e-10
     seeds: int = 48               # inverse-kinematics seeds per round
-    seed_rounds: int = 4          # rounds at most; one without a new branch ends the search
+    seed_rounds: int = 4          # rounds at most; one whose second half finds no branch ends
     max_points: int = 50_000
 
 
@@ -101,9 +101,10 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
                                 ) -> tuple[SelfMotionManifold, ...]:
     """Step 1: trace every branch of the pre-image of the task point x.
 
-    Seeds come in rounds of `options.seeds` random configurations: a round that finds
-    a new branch is followed by another, up to `options.seed_rounds` (arms with joint
-    limits have many branches, each cut into arcs by the limits).
+    Seeds come in rounds of `options.seeds` random configurations; while a round's last
+    new branch came from its second half (the search had not settled), another round
+    follows, up to `options.seed_rounds` (arms with joint limits have many branches, each
+    cut into arcs by the limits).
     """
     options = options or ManifoldOptions()
     x = np.asarray(x, dtype=float)
@@ -112,18 +113,19 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
     limits = robot.limits
     branches: list[SelfMotionManifold] = []
     for _ in range(options.seed_rounds):
-        found = len(branches)
         seeds = rng.uniform(limits[:, 0], limits[:, 1], size=(options.seeds, robot.n_joints))
         solved, converged = project_many(robot, x, seeds, options.tolerance)
-        for theta in solved[converged]:
-            theta = wrap_configuration(theta, robot.periodic)
+        last_new = -1
+        for k in np.flatnonzero(converged):
+            theta = wrap_configuration(solved[k], robot.periodic)
             if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
                 continue
             branch = _trace_branch(robot, x, theta, options)
             log.debug('branch %d: %d points, closed=%s', len(branches), len(branch),
                       branch.closed)
             branches.append(branch)
-        if len(branches) == found:
+            last_new = k
+        if last_new < options.seeds // 2:
             break
     if not branches:
         log.info('no configuration reaches %s', x)
