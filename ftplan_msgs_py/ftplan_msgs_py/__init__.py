@@ -51,6 +51,7 @@ from ftplan_msgs_py.stamps import (
     duration_to_seconds,
     seconds_to_duration,
     seconds_to_time,
+    time_to_nanoseconds,
     time_to_seconds,
 )
 
@@ -93,6 +94,7 @@ __all__ = [
     'read_quaternion',
     'seconds_to_duration',
     'seconds_to_time',
+    'time_to_nanoseconds',
     'time_to_seconds',
     'unit_quaternions',
 ]

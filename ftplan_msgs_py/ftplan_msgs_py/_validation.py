@@ -61,7 +61,10 @@ def joint_names(names: Sequence[str], field: str) -> list[str]:
     """Return `names` as a list after checking it holds unique, non-empty strings."""
     if isinstance(names, str):
         raise ValueError(f'{field} must be a sequence of joint names, not the string {names!r}')
-    result = list(names)
+    try:
+        result = list(names)
+    except TypeError:
+        raise ValueError(f'{field} must be a sequence of joint names, got {names!r:.80}') from None
     if not result:
         raise ValueError(f'{field} is empty; pass at least one joint name')
     for name in result:
@@ -69,6 +72,25 @@ def joint_names(names: Sequence[str], field: str) -> list[str]:
             raise ValueError(f'{field} must hold non-empty strings, got {name!r}')
     index_by_name(result, field)
     return result
+
+
+def mapping_items(value: object, field: str) -> list[tuple[object, object]]:
+    """Return the (key, value) pairs of a mapping; None counts as empty."""
+    if value is None:
+        return []
+    if not isinstance(value, Mapping):
+        raise ValueError(f'{field} must be a mapping (e.g. a dict) or None, got {value!r:.80}')
+    return list(value.items())
+
+
+def sequence(value: object, field: str) -> list:
+    """Return the items of a list-like value (not a string or a mapping) as a list."""
+    if isinstance(value, (str, bytes, Mapping)):
+        raise ValueError(f'{field} must be a sequence, got {value!r:.80}')
+    try:
+        return list(value)
+    except TypeError:
+        raise ValueError(f'{field} must be a sequence, got {value!r:.80}') from None
 
 
 def index_by_name(names: Iterable[str], field: str) -> dict[str, int]:

@@ -8,7 +8,7 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from std_msgs.msg import Header
 
-from ftplan_msgs_py._validation import stamp_or_zero
+from ftplan_msgs_py._validation import mapping_items, sequence, stamp_or_zero
 
 DIAGNOSTIC_LEVELS = {
     'OK': DiagnosticStatus.OK,
@@ -66,12 +66,12 @@ def create_diagnostic_status(
     :param hardware_id: the hardware the status is about, if any.
     :return: the DiagnosticStatus.
     """
-    if level not in DIAGNOSTIC_LEVELS:
+    if not isinstance(level, str) or level not in DIAGNOSTIC_LEVELS:
         raise ValueError(
             f'diagnostic level {level!r} is unknown; use one of {list(DIAGNOSTIC_LEVELS)}'
         )
     pairs = []
-    for key, value in (values or {}).items():
+    for key, value in mapping_items(values, 'diagnostic values'):
         pairs.append(KeyValue(key=_check_text(key, 'value key', allow_empty=False),
                               value=_format_value(value)))
     return DiagnosticStatus(
@@ -87,7 +87,7 @@ def create_diagnostic_array(
     statuses: Iterable[DiagnosticStatus], stamp: Time | None = None
 ) -> DiagnosticArray:
     """Create a DiagnosticArray of `statuses`, stamped `stamp` (None leaves it zero)."""
-    status_list = list(statuses)
+    status_list = sequence(statuses, 'statuses')
     for i, status in enumerate(status_list):
         if not isinstance(status, DiagnosticStatus):
             raise ValueError(

@@ -14,7 +14,14 @@ from numpy.typing import ArrayLike, NDArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from ftplan_msgs_py._validation import INT32_MAX, INT32_MIN, finite_array, frame, stamp_or_zero
+from ftplan_msgs_py._validation import (
+    INT32_MAX,
+    INT32_MIN,
+    finite_array,
+    frame,
+    sequence,
+    stamp_or_zero,
+)
 
 ObstacleKey = tuple[str, int]
 
@@ -62,7 +69,7 @@ def _check_obstacle(
     where: str,
 ) -> ObstacleShape:
     """Validate one obstacle's fields and return it with a normalised, read-only pose."""
-    if shape not in _TYPE_BY_SHAPE:
+    if not isinstance(shape, str) or shape not in _TYPE_BY_SHAPE:
         raise ValueError(
             f'{where} has shape {shape!r}; use one of {sorted(_TYPE_BY_SHAPE)}'
         )
@@ -199,7 +206,10 @@ def create_obstacle_markers(
     if clear_first:
         markers.append(Marker(header=header(), action=Marker.DELETEALL))
     seen: set[ObstacleKey] = set()
-    for obstacle in obstacles:
+    for index, obstacle in enumerate(sequence(obstacles, 'obstacles')):
+        if not isinstance(obstacle, ObstacleShape):
+            raise ValueError(f'obstacles[{index}] is a {type(obstacle).__name__}, not an '
+                             'ObstacleShape')
         key = _check_key(obstacle.key)
         if key in seen:
             raise ValueError(f'{_describe(key)} appears twice; give each obstacle its own key')

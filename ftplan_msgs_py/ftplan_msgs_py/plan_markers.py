@@ -18,7 +18,13 @@ from numpy.typing import ArrayLike, NDArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from ftplan_msgs_py._validation import finite_array, frame, stamp_or_zero
+from ftplan_msgs_py._validation import (
+    finite_array,
+    frame,
+    mapping_items,
+    sequence,
+    stamp_or_zero,
+)
 
 END_EFFECTOR_NS = 'end_effector_path'
 FAILURE_SURFACE_NS = 'failure_surface'
@@ -129,17 +135,20 @@ def create_plan_markers(
     """
     base = frame(frame_id, 'frame_id')
     joint_frame = frame(joint_space_frame, 'joint_space_frame')
-    layers = [_arm_layer(ns, base, polyline) for ns, polyline in (arm_polylines or {}).items()]
+    layers = [_arm_layer(_namespace(ns, 'arm_polylines'), base, polyline)
+              for ns, polyline in mapping_items(arm_polylines, 'arm_polylines')]
     if end_effector_path is not None:
         layers.append(_Layer(END_EFFECTOR_NS, base, [_Part(
             Marker.LINE_STRIP, _line(WORKSPACE_LINE_WIDTH),
             _workspace_polyline(end_effector_path, 'end_effector_path'))]))
-    for ns, curves in (joint_space_curves or {}).items():
+    for ns, curves in mapping_items(joint_space_curves, 'joint_space_curves'):
+        _namespace(ns, 'joint_space_curves')
         layers.append(_Layer(ns, joint_frame, [
             _Part(Marker.LINE_STRIP, _line(JOINT_SPACE_LINE_WIDTH),
                   _joint_space_points(curve, f'joint_space_curves[{ns!r}][{i}]', 2))
-            for i, curve in enumerate(curves)]))
-    for ns, points in (joint_space_points or {}).items():
+            for i, curve in enumerate(sequence(curves, f'joint_space_curves[{ns!r}]'))]))
+    for ns, points in mapping_items(joint_space_points, 'joint_space_points'):
+        _namespace(ns, 'joint_space_points')
         layers.append(_Layer(ns, joint_frame, [_Part(
             Marker.SPHERE_LIST, _spheres(JOINT_SPACE_POINT_DIAMETER),
             _joint_space_points(points, f'joint_space_points[{ns!r}]', 0))]))
@@ -156,6 +165,14 @@ def _arm_layer(ns: str, frame_id: str, polyline: ArrayLike) -> _Layer:
     points = _workspace_polyline(polyline, f'arm_polylines[{ns!r}]')
     return _Layer(ns, frame_id, [_Part(Marker.LINE_STRIP, _line(WORKSPACE_LINE_WIDTH), points),
                                  _Part(Marker.SPHERE_LIST, _spheres(ARM_JOINT_DIAMETER), points)])
+
+
+def _namespace(ns: object, field: str) -> str:
+    """Return a marker namespace (a key of `field`) after checking it is a non-empty string."""
+    if not isinstance(ns, str) or not ns:
+        raise ValueError(f'{field} has the key {ns!r}; a marker namespace must be a '
+                         'non-empty string')
+    return ns
 
 
 def _check_namespaces(layers: list[_Layer]) -> None:

@@ -41,6 +41,18 @@ def time_to_seconds(msg: Time) -> float:
     return _join_seconds(msg.sec, msg.nanosec, 'Time')
 
 
+def time_to_nanoseconds(msg: Time) -> int:
+    """Read a Time as integer nanoseconds since the epoch, as rclpy's Time.from_msg does.
+
+    :raises ValueError: when sec is negative (before the epoch, which rclpy refuses) or
+        nanosec is not below 1e9, naming the field.
+    """
+    if msg.sec < 0:
+        raise ValueError(f'Time.sec = {msg.sec} is before the epoch; stamps must be >= 0')
+    _join_seconds(msg.sec, msg.nanosec, 'Time')
+    return msg.sec * _NS_PER_S + msg.nanosec
+
+
 def seconds_to_duration(t: float) -> Duration:
     """Create a Duration from `t` seconds (finite, may be negative), rounded to 1 ns.
 

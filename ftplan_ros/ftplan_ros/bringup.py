@@ -35,7 +35,7 @@ from sensor_msgs.msg import JointState
 
 from ftplan_msgs_py import read_joint_state
 
-from .core import InputError, Scene, load_scene
+from .core import InputError, Scene, check_plannable, load_scene
 from .core.task_space import format_point
 from .nodes.executor import ExecutorNode
 from .nodes.injector import InjectorNode, parse_drill
@@ -287,7 +287,9 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _check(args: argparse.Namespace) -> Scene:
+    """Return the scene once every argument is usable; InputError (exit 2) before any run."""
     scene = load_scene(args.scene)
+    check_plannable(scene)  # else the nodes would start and refuse the plan later
     for text in args.drill:
         try:
             parse_drill(text, scene.robot.joint_names)
@@ -299,6 +301,12 @@ def _check(args: argparse.Namespace) -> Scene:
         value = getattr(args, name)
         if not np.isfinite(value) or value <= 0:
             raise InputError(f'--{name}', f'must be a finite number > 0, got {value}')
+    if args.png is not None:
+        if args.png.suffix.lower() != '.png':
+            raise InputError('--png', f'writes PNG files: give a path ending in .png, not '
+                             f'{args.png}')
+        if not args.png.resolve().parent.is_dir():
+            raise InputError('--png', f'the folder of {args.png} does not exist')
     return scene
 
 

@@ -4,6 +4,7 @@
     ftplan drill SCENE.yaml [--trials N] [--seed S] [--png MOTION.png] [--json OUT.json]
     ftplan figure SCENE.yaml [--out DIR]
     ftplan bench [--robot planar3r|panda|iiwa14] [--scenes N] [--seed S] [--cells C]
+                 [--crowded-cells C]
                  [--json OUT.json]
     ftplan study SPEC.yaml --out DIR [--scheduler ADDRESS] [--workers N]
 
@@ -130,14 +131,18 @@ def _parser() -> argparse.ArgumentParser:
 
     bench = commands.add_parser('bench', help='time the planner against a baseline in one run')
     bench.add_argument('--robot', default='planar3r', choices=('planar3r', 'panda', 'iiwa14'),
-                       help='planar3r (the paper\'s arm, against the exhaustive grid) or a '
+                       help='planar3r (the paper\'s arm, recall against a reference grid) or a '
                        '7-joint arm (pose tasks among 10 obstacles, against sampled locks); '
                        'planar3r')
     bench.add_argument('--scenes', type=int, default=30,
                        help='random scenes per group (30; a 7-joint arm: tasks, 30)')
     bench.add_argument('--seed', type=int, default=0)
-    bench.add_argument('--cells', type=int, default=90,
-                       help='planar3r: grid cells per joint (90: 4 deg)')
+    bench.add_argument('--cells', type=int, default=256,
+                       help='planar3r: cells per joint of the reference grid that decides '
+                       'whether a plan exists (256: 1.4 deg; 16 times a power of two)')
+    bench.add_argument('--crowded-cells', type=int, default=128,
+                       help='planar3r: cells per joint of the grid that keeps a plan in the '
+                       'crowded scenes as they are built (128)')
     bench.add_argument('--json', type=Path, help='write every measurement here')
     bench.set_defaults(run=_bench_command)
 
@@ -254,13 +259,19 @@ def _figure_command(args: argparse.Namespace) -> int:
 
 def _bench_command(args: argparse.Namespace) -> int:
     _at_least(args.scenes, 1, '--scenes', 100_000)
-    _at_least(args.cells, 2, '--cells', 180)  # 180^3 cells: about 2 GB at the grid's peak
+    for flag in ('cells', 'crowded_cells'):  # 256^3 cells: about 2 GB at the grid's peak
+        value = getattr(args, flag)
+        _at_least(value, 16, f'--{flag.replace("_", "-")}', 256)
+        if value % 16 or (value // 16) & (value // 16 - 1):
+            raise InputError(f'--{flag.replace("_", "-")}', f'must be 16 times a power of two '
+                             f'(16, 32, 64, 128 or 256), got {value}')
     _at_least(args.seed, 0, '--seed')
     if args.robot != 'planar3r':
         from .spatial_bench import run_spatial_benchmark
         return run_spatial_benchmark(args.robot, args.scenes, args.seed, args.json, Progress())
-    from .bench import run_benchmark
-    return run_benchmark(args.scenes, args.seed, args.cells, args.json, Progress())
+    from .recall_bench import run_recall_benchmark
+    return run_recall_benchmark(args.scenes, args.seed, args.cells, args.crowded_cells,
+                                args.json, Progress())
 
 
 def _study_command(args: argparse.Namespace) -> int:

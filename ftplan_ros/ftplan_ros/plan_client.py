@@ -241,9 +241,11 @@ class PlanClient(Node):
             (x, y, z, ax, ay, az) or (x, y, z, qx, qy, qz, qw)) or a PoseStamped; None: the
             scene's goal. What the planner takes from it is its `task_kind`.
         :param start: likewise; None: the arm's current position.
-        :param tolerance: goal tolerance [m]; 0 keeps the scene's.
+        :param tolerance: goal tolerance [m]; 0 keeps the scene's. GetPlan carries it as a
+            float32, so it must be 0 or between 1.2e-38 and 3.4e38 (ValueError otherwise).
         :param timeout: seconds to wait for the answer and the latched plan topics.
         """
+        tolerance = _float32_tolerance(tolerance)
         if not self.spin_until(self.plan_client.service_is_ready, min(timeout, 5.0)):
             return PlannedMotion(Outcome.UNAVAILABLE, f'{PLAN_SERVICE} is not available')
         request = GetPlan.Request(start=_pose(start, frame_id), goal=_pose(goal, frame_id),
@@ -287,9 +289,12 @@ class PlanClient(Node):
     def _gather_plan(self, key: str, timeout: float):
         """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in.
 
-        Returns None on timeout, and the reason as a string when they cannot be read.
+        Returns None on timeout, and the reason as a string when they cannot be read (S_F
+        carries no stamp: an unreadable one may be another publisher's, so the plan's own is
+        waited for until the timeout).
         """
         found = []
+        problems = []
 
         def complete() -> bool:
             start, trajectory, surface = self._start, self._trajectory, self._surface
@@ -303,8 +308,8 @@ class PlanClient(Node):
                 paths = read_failure_surface(surface)
                 theta_s = read_joint_state(start, names)
             except ValueError as error:
-                found.append(f'unreadable plan topics: {error}')
-                return True
+                problems[:] = [f'unreadable plan topics: {error}']
+                return False
             if paths.shape[1:] != positions.shape:
                 return False
             matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
@@ -313,7 +318,9 @@ class PlanClient(Node):
             found.append((names, theta_s, positions, times, paths, int(matches[0])))
             return True
 
-        return found[0] if self.spin_until(complete, timeout) else None
+        if self.spin_until(complete, timeout):
+            return found[0]
+        return problems[0] if problems else None
 
     def execute(self, motion: PlannedMotion | None = None, timeout: float = 120.0,
                 ) -> ExecutionReport:
@@ -361,6 +368,24 @@ class PlanClient(Node):
         if response is None:
             return False, f'no answer from {service} within {timeout} s'
         return response.success, response.message
+
+
+def _float32_tolerance(tolerance: float) -> float:
+    """Return a goal tolerance [m] that GetPlan's float32 carries; ValueError naming it if not.
+
+    A positive value below float32's smallest normal number would arrive as 0 (the
+    scene's tolerance) or stripped of its digits, without a word.
+    """
+    value = float(tolerance)
+    tiny, huge = float(np.finfo(np.float32).tiny), float(np.finfo(np.float32).max)
+    if not np.isfinite(value) or value < 0.0 or value > huge:
+        raise ValueError(f'tolerance must be a finite number >= 0 [m] that fits a float32 '
+                         f'(0: the scene\'s), got {tolerance!r}')
+    if 0.0 < value < tiny:
+        raise ValueError(f'tolerance {value:g} m is below the smallest normal float32 '
+                         f'({tiny:g}), the type of GetPlan.tolerance: it would arrive as 0 or '
+                         'without its digits')
+    return value
 
 
 def _pose(point: Sequence[float] | PoseStamped | None, frame_id: str) -> PoseStamped:

@@ -24,11 +24,12 @@ def lock_path(domain: int) -> Path:
     return Path(tempfile.gettempdir()) / f'ftplan-ros-domain-{domain}.lock'
 
 
-def claim_domain() -> int:
+def claim_domain(environment: bool = True) -> int:
     """Lock the first free domain in 1..101 for the rest of this process and return it.
 
-    It also goes into os.environ['ROS_DOMAIN_ID'], where rclpy.init and every child
-    process started afterwards read it.
+    With `environment` it also goes into os.environ['ROS_DOMAIN_ID'], where rclpy.init
+    and every child process started afterwards read it (a second domain, for nodes that
+    must not see the others, leaves it alone).
     """
     for domain in DOMAINS:
         try:
@@ -41,6 +42,7 @@ def claim_domain() -> int:
             handle.close()
             continue
         _held.append(handle)
-        os.environ['ROS_DOMAIN_ID'] = str(domain)
+        if environment:
+            os.environ['ROS_DOMAIN_ID'] = str(domain)
         return domain
     raise RuntimeError(f'every ROS domain in 1..101 is taken ({lock_path(1).parent})')

@@ -8,6 +8,7 @@ from spatial_scenes import panda_scene
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
+DETOUR = Path(__file__).parent / 'scenes' / 'detour.yaml'
 
 
 def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tmp_path):
@@ -54,3 +55,29 @@ def test_a_drill_of_a_7_joint_arm_through_the_bringup(processes, tmp_path):
     row = next(line for line in out.splitlines() if 'panda_joint2@0.4' in line)
     assert row.split()[2] == 'panda_joint2' and row.endswith('reached')
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'
+
+
+def test_a_bad_png_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_path):
+    """Issue 10, row 11: both ran the whole suite first, then a traceback and exit 1."""
+    two = tmp_path / 'two_links.yaml'
+    two.write_text('robot: {type: planar, link_lengths: [1.0, 1.0]}\n'
+                   'task: {start: [1.5, 0.0], goal: [1.0, 0.5]}\n')
+    for args, problem in [(['--scene', FIG3A, '--png', tmp_path / 'x.jpg'],
+                           '--png: writes PNG files: give a path ending in .png'),
+                          (['--scene', FIG3A, '--png', tmp_path / 'none' / 'x.png'],
+                           'does not exist'),
+                          (['--scene', two], '2 joints give no redundancy')]:
+        code, out, err = processes(BRINGUP + args).wait(timeout=120)
+        assert code == 2, (args, out, err)
+        assert problem in err and 'Traceback' not in err
+        assert 'starting the planner' not in err                 # refused before any node
+
+
+def test_drills_from_the_sims_default_start_work_when_theta_s_is_on_another_arc(processes):
+    """Issue 10: the sim starts on another arc of M_s than θ_s and a straight joint move
+    collides; runs failed before any drill with "no collision-free approach to theta_s"."""
+    bringup = processes(BRINGUP + ['--scene', DETOUR, '--drill', 'joint2@0.5',
+                                   '--drill', 'joint1@0.0s'])
+    code, out, err = bringup.wait(timeout=300)
+    assert code == 0, out + err
+    assert '2/2 runs reached the goal without collision' in out

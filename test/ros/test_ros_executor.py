@@ -1,10 +1,13 @@
 """The executor with the planner and the sim, in one process: bad inputs and phases."""
 
+import time
+
 import numpy as np
 import pytest
 from ros_support import wait_for
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import create_locked_joint
 from ftplan_ros.nodes.executor import ExecutorNode
@@ -110,34 +113,53 @@ def test_a_lock_of_an_unknown_joint_is_logged_and_ignored(suite):
     wait_for(lambda: ros.probe.logged('ftplan_executor', 'ignored locked-joint event'))
 
 
-def test_a_lock_during_no_execution_is_logged_and_ignored(suite):
+def test_a_lock_while_idle_is_remembered_and_the_locked_joint_is_never_commanded(suite):
+    """Issue 10, row 6: a lock while idle was forgotten; the next execution moved joint2."""
     ros = suite
-    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint2'))
-    wait_for(lambda: ros.probe.logged('ftplan_executor',
-                                      'ignored lock of joint2: no execution is running'))
-    assert all(s.values['state'] == 'idle' for s in ros.probe.statuses(STATUS))
-    reset(ros)                                               # the sim did lock it: free it
+    ros.probe.listen(JointTrajectory, '/ftplan/joint_command')
     plan(ros)
+    advertise_locks(ros)
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint2'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint2 locked while no execution '
+                                      'is running: remembered'))
+    idle = [s for s in ros.probe.statuses(STATUS) if s.values.get('locked_joints')][-1]
+    assert idle.values['state'] == 'idle' and idle.values['locked_joints'] == 'joint2'
+    refused = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert not refused.success
+    assert "['joint2'] locked (joint2 (while idle)) and would be commanded" in refused.message
+    time.sleep(0.3)
+    assert ros.probe.received('/ftplan/joint_command') == []      # nothing was commanded
+    reset(ros)
     number = execute(ros)
     state_of(ros, number, 'done')
     ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint3'))
-    wait_for(lambda: ros.probe.logged('ftplan_executor',
-                                      f'ignored lock of joint3: execution {number} is done'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint3 locked while no execution'))
+    again = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert not again.success and 'joint3' in again.message
 
 
-def test_a_lock_while_approaching_fails_cleanly_and_the_next_run_succeeds(slow_suite):
+def test_a_lock_while_approaching_stops_and_goes_on_with_the_joints_left(slow_suite):
+    """Not failure-tolerant: stop, report, plan to the goal from there with joint1 held."""
     ros = slow_suite
     plan(ros)
     advertise_locks(ros)
     number = execute(ros)
     state_of(ros, number, 'approaching')
     ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1'))
-    failed = state_of(ros, number, 'failed')
-    assert 'before the failure-tolerant nominal path' in failed.values['reason']
-    assert failed.level == 'ERROR'
-    wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint1 locked while approaching'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint1 locked while approaching '
+                                      'theta_s, before the failure-tolerant nominal path'))
+    done = state_of(ros, number, 'done')
+    assert done.values['locked_joint'] == 'joint1'
+    assert any('with the joints left' in s.message and s.level == 'WARN'
+               for s in execution(ros, number))
+    locked = np.array(parse_vector(done.values['lock_configuration']))
+    final = wait_for(lambda: [s for s in ros.probe.statuses('ftplan_sim: arm')
+                              if s.values['goal_reached'] == 'True'])[-1]
+    assert np.array(parse_vector(final.values['configuration']))[0] == \
+        pytest.approx(locked[0], abs=1e-6)
+    assert final.values['collisions'] == '0'
     refused = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
-    assert not refused.success and "['joint1'] locked in execution" in refused.message
+    assert not refused.success and f'joint1 (in execution {number})' in refused.message
     reset(ros)
     assert state_of(ros, execute(ros), 'done')
 

@@ -12,7 +12,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 from ftplan_msgs_py import create_obstacle_markers
 from ftplan_ros.core import CollisionChecker, InputError, Obstacle, Task, load_scene, task_errors
 from ftplan_ros.core.angles import wrap_angle
-from ftplan_ros.nodes.motion import progress_along, straight_moves, time_path
+from ftplan_ros.core.approach import straight_move_ends
+from ftplan_ros.nodes.motion import progress_along, time_path
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
     obstacle_from_shape,
@@ -53,7 +54,9 @@ def test_progress_along_a_path_also_across_whole_turns():
 
 def test_straight_moves_offer_both_ways_round_shortest_first():
     periodic = np.array([True, True, False])
-    moves = straight_moves(np.array([3.0, 0.0, 0.0]), np.array([-3.0, 0.5, 1.0]), periodic)
+    q = np.array([3.0, 0.0, 0.0])
+    moves = [np.stack([q, end]) for end in
+             straight_move_ends(q, np.array([-3.0, 0.5, 1.0]), periodic)]
     assert len(moves) == 4
     lengths = [np.linalg.norm(m[1] - m[0]) for m in moves]
     assert lengths == sorted(lengths)

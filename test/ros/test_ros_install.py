@@ -17,6 +17,14 @@ from std_msgs.msg import Header, String
 
 from ftplan_msgs_py import create_pose
 from ftplan_ros.nodes.qos import LATCHED_QOS
+from ftplan_ros.nodes.topics import (
+    DIAGNOSTICS,
+    EXECUTOR_NODE,
+    INJECTOR_NODE,
+    JOINT_STATES,
+    LOCKED_JOINT,
+    TRAJECTORY,
+)
 from ftplan_ros.plan_client import Outcome, PlanClient
 
 EXECUTABLES = ('planner', 'injector', 'executor', 'sim', 'bringup')
@@ -41,6 +49,12 @@ def test_ament_index_finds_both_packages_and_the_executables():
 def _pose(x, y, frame='base_link'):
     return PoseStamped(header=Header(frame_id=frame),
                        pose=Pose(position=Point(x=float(x), y=float(y))))
+
+
+def _subscribes(observer, node_name: str, topic: str) -> bool:
+    """Whether `observer` sees a subscription of `node_name` to `topic` in the graph."""
+    return any(info.node_name == node_name
+               for info in observer.get_subscriptions_info_by_topic(topic))
 
 
 def test_the_installed_planner_serves_another_process(ros, processes):
@@ -70,6 +84,12 @@ def test_four_installed_nodes_drill_across_processes(ros_context, processes):
     client = PlanClient(context=ros_context)
     try:
         assert client.wait_until_ready(timeout=60.0)
+        # A loaded machine may still be starting the injector when the plan is done: the
+        # drill needs its subscriptions, and the executor's to its locks, in the graph.
+        for node, topic in [(INJECTOR_NODE, DIAGNOSTICS), (INJECTOR_NODE, TRAJECTORY),
+                            (INJECTOR_NODE, JOINT_STATES), (EXECUTOR_NODE, LOCKED_JOINT)]:
+            wait_for(lambda node=node, topic=topic: _subscribes(client, node, topic), timeout=60.0,
+                     what=f'{node} to subscribe to {topic}')
         # From the sim's joint state, once it has reached the planner process.
         motion = client.plan(goal=(1.0, 0.0), timeout=60.0)
         deadline = time.monotonic() + 30.0

@@ -150,15 +150,39 @@ def _configuration_at(scene, x):
 
 def test_a_lock_at_an_angle_sweeps_the_arm_there_and_checks_the_sweep(ros):
     scene = load_scene(FIG3A)
-    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0])
+    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0], lock_angle_tolerance=1.5)
     ros.probe.listen(JointState, '/joint_states', 1000)
     wait_for(lambda: ros.probe.received('/joint_states'))
-    # Locking joint1 nearly a full turn away swings the stretched arm through the disks,
-    # although it starts and ends clear of them.
-    target = 2 * np.pi - 0.05
+    # Locking joint1 a radian away swings the stretched arm through a disk, although it
+    # starts and ends clear of them (a tolerance this wide is for this test only).
+    target = 1.0
     checker = CollisionChecker(scene.robot, scene.obstacles)
     assert checker.min_clearance(np.array([[0.0, 0.0, 0.0], [target, 0.0, 0.0]])).min() > 0.0
     ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1', target))
     status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.level == 'ERROR'])[0]
     assert 'collision' in status.message and int(status.values['collisions']) == 1
     wait_for(lambda: abs(last(ros)[0] - target) < 1e-12, what='joint1 at the lock angle')
+
+
+@pytest.mark.parametrize('angle', [1.0, 1e5, 1e308, -2 * np.pi + 1.0])
+def test_a_lock_angle_away_from_the_joint_is_refused_and_the_arm_stays(ros, angle):
+    """Issue 10, row 9: such locks jumped the joint through a disk, stalled /joint_states
+    for seconds (1e5) or were dropped without a word (1e308)."""
+    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0])
+    ros.probe.listen(JointState, '/joint_states', 1000)
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint1', angle))
+    refused = wait_for(lambda: [s for s in ros.probe.statuses('ftplan_sim: input')
+                                if 'ignored locked-joint event' in s.message])[0]
+    assert 'a joint locks where it stands' in refused.message
+    count = len(ros.probe.received('/joint_states'))
+    wait_for(lambda: len(ros.probe.received('/joint_states')) > count + 20, timeout=5.0,
+             what='joint states flowing on')
+    assert np.array_equal(last(ros), [0.0, 0.0, 0.0])
+    assert all(s.values['collisions'] == '0' and s.values['locked'] == ''
+               for s in ros.probe.statuses(STATUS))
+    # Within the tolerance (here a whole turn plus a hair away) it locks, a hair off.
+    ros.probe.publish(JointState, '/ftplan/locked_joint',
+                      create_locked_joint('joint1', 2 * np.pi + 0.01))
+    wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.values['locked'] == 'joint1'])
+    wait_for(lambda: abs(last(ros)[0] - 0.01) < 1e-12, what='joint1 locked 0.01 rad on')

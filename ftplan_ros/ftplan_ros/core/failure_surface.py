@@ -123,6 +123,48 @@ class FailureSurface:
                           self.path_edge(k, w)], axis=1)
         return np.concatenate([lower, upper])
 
+    @cached_property
+    def cuts(self) -> np.ndarray:
+        """(K-1,) bool: True where no quads join path k to path k+1.
+
+        A path repeated exactly (path k equal to path k-1) closes a sheet: the web goes on
+        from path k+1 as a new sheet, joined to the others only where they share points
+        (`vertex_ids`). The paper's fan has one sheet.
+        """
+        paths = self.paths
+        cut = np.zeros(max(len(paths) - 1, 0), dtype=bool)
+        if len(paths) >= 3:
+            cut[1:] = np.all(paths[1:-1] == paths[:-2], axis=(1, 2))
+        return cut
+
+    @cached_property
+    def live_triangles(self) -> np.ndarray:
+        """(T,) bool: the triangles of S_F (those of quads between cut paths are not)."""
+        n_points = self.paths.shape[1]
+        quads = np.repeat(~self.cuts, n_points - 1)
+        return np.concatenate([quads, quads])
+
+    @cached_property
+    def vertex_ids(self) -> np.ndarray:
+        """(V,) one number per distinct point: vertices with equal coordinates are one point."""
+        _, ids = np.unique(self.vertices, axis=0, return_inverse=True)
+        return ids.reshape(-1)
+
+    @cached_property
+    def edge_ids(self) -> np.ndarray:
+        """(E,) one number per distinct segment of `edges` (by the points it joins)."""
+        a, b = self.vertex_ids[self.edges[:, 0]], self.vertex_ids[self.edges[:, 1]]
+        count = int(self.vertex_ids.max()) + 1
+        _, ids = np.unique(np.minimum(a, b) * count + np.maximum(a, b), return_inverse=True)
+        return ids.reshape(-1)
+
+    def sheets(self) -> list[tuple[int, int]]:
+        """(first, last) path indices of each sheet, in order."""
+        ends = np.flatnonzero(self.cuts)
+        firsts = np.concatenate([[0], ends + 1])
+        lasts = np.concatenate([ends, [len(self.paths) - 1]])
+        return list(zip(firsts.tolist(), lasts.tolist(), strict=True))
+
     def to_dict(self) -> dict:
         """Return the contract's `failure_surface` JSON object (radians)."""
         return {'paths': self.paths.tolist(), 'nominal': self.nominal,

@@ -21,3 +21,8 @@ class PlannerOptions:
     candidate_refinement: int = 4     # start candidates per manifold step on the retry
     curves: int = 6                   # redundancy >= 2: curves on the manifolds tried at most
     curve_samples: int = 64           # redundancy >= 2: inverse-kinematics samples per task point
+    # The methods tried in turn: the paper's surface always, then where it finds no plan
+    # recovery sheets over the failure-tolerant set on a joint grid (planar 3R arms among
+    # disks; web_search.py). Leave 'recovery_sheets' out for the paper's method alone.
+    methods: tuple[str, ...] = ('paper_surface', 'recovery_sheets')
+    sheet_cells: tuple[int, ...] = (64, 128)  # recovery sheets: joint grids tried in turn

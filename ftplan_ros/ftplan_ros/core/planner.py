@@ -2,7 +2,9 @@
 
 With one degree of redundancy (r = n - m = 1: the paper's planar 3R, a 7-joint arm and
 a 6-D pose) the self-motion manifolds are curves and `SurfaceSearch` runs Steps 1-6 and
-the self-check. With more (a 7-joint arm and a 3-D position, a planar 4R), the paper
+the self-check; where it finds no plan for a planar 3R arm among disks, recovery sheets
+over the failure-tolerant set take over (`web_search.py`; stats['method'] says which
+produced the plan). With more (a 7-joint arm and a 3-D position, a planar 4R), the paper
 chooses a curve on each manifold and proceeds as for r = 1: `plan_on_curves` does that.
 When no plan survives the lock of every tolerated joint because some joints' failure
 planes miss M_g^F from every start, the planner says which, and whether a plan exists
@@ -28,6 +30,7 @@ from .robot import PlanarChain
 from .scene import Scene
 from .surface_search import SurfaceSearch
 from .task_space import point_position
+from .web_search import PAPER_METHOD, past_the_paper
 
 log = logging.getLogger(__name__)
 
@@ -64,14 +67,17 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
          rng: np.random.Generator | None = None,
          progress: Callable[[str], None] | None = None,
          start_configuration: np.ndarray | None = None,
-         cache: ManifoldCache | None = None) -> PlanResult:
+         cache: ManifoldCache | None = None,
+         prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None) -> PlanResult:
     """Plan a failure-tolerant motion for the scene's task; see the module docstring.
 
     `rng` seeds the inverse-kinematics samples (default: seed 0, so plans repeat);
     `progress` receives a line per stage. With `start_configuration` (n,) [rad] only that
     θ_s is considered (moved onto M_s by Newton first): the plan says whether it is a
     failure-tolerant start. A `cache` keeps traced manifolds between calls. Raises
-    InputError for an unplannable scene.
+    InputError for an unplannable scene. With one degree of redundancy, `prefer_starts`
+    maps start candidates (c, n) to a mask (c,) of the ones to search first (issue 10:
+    `approach.ApproachPlanner.prefer_reachable`, the starts the arm reaches along M_s^F).
     """
     options = options or PlannerOptions()
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -80,12 +86,16 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
     started = time.perf_counter()
     check_plannable(scene)
     if scene.robot.n_joints - scene.robot.task_dim == 1:
-        result = SurfaceSearch(scene, options, rng, report, cache).run(start_configuration)
+        search = SurfaceSearch(scene, options, rng, report, cache)
+        search.prefer_starts = prefer_starts  # issue 10: reachable starts first
+        result = search.run(start_configuration)
+        result = past_the_paper(scene, result, options, report, start_configuration,
+                                prefer_starts)
         if not result.feasible and start_configuration is None:
             result = _with_coverage(scene, result, options, rng, report, cache)
     else:
         result = plan_on_curves(scene, options, rng, report, cache, start_configuration)
-    stats = dict(result.stats, plan_time_s=time.perf_counter() - started)
+    stats = {'method': PAPER_METHOD} | dict(result.stats, plan_time_s=time.perf_counter() - started)
     log.info('plan %s in %.3f s%s', 'found' if result.feasible else 'not found',
              stats['plan_time_s'], f': {result.reason}' if result.reason else '')
     return replace(result, stats=stats)

@@ -122,20 +122,26 @@ def _slice_graph(surface: FailureSurface, joint: int, level: float, segment: int
                  start: np.ndarray) -> tuple[np.ndarray, csr_matrix, np.ndarray]:
     """Nodes (N, n), weighted arcs and goal-row node ids of S_F ∩ {θ_joint = level}.
 
-    Nodes are web vertices on the level and strict crossings of web edges, and the start
-    point comes last. Vertices with θ_joint >= level count as above; a triangle whose
-    corners are all strictly above or all below holds no node.
+    Nodes are the web's points on the level and strict crossings of its segments, and the
+    start point comes last; vertices with equal coordinates are one point, and so are
+    segments joining equal points (`FailureSurface.vertex_ids`, `edge_ids`). Vertices with
+    θ_joint >= level count as above; a triangle whose corners are all strictly above or
+    all below holds no node. Triangles of cut strips are not part of S_F.
     """
     vertices = surface.vertices
-    n_vertices = len(vertices)
+    point_of = surface.vertex_ids
+    n_points_ = int(point_of.max()) + 1
+    segment_of = surface.edge_ids
     edges = surface.edges
     values = vertices[:, joint]
     above = values >= level
     on_level = values == level
+    live = surface.live_triangles
 
     lowest, highest = surface.triangle_ranges
-    crossing = (lowest[:, joint] <= level) & (highest[:, joint] >= level)
-    beside_start = surface.triangles_beside_path_edge(surface.nominal, segment)
+    crossing = live & (lowest[:, joint] <= level) & (highest[:, joint] >= level)
+    beside_start = [t for t in surface.triangles_beside_path_edge(surface.nominal, segment)
+                    if live[t]]
     crossing[beside_start] = True
     touches_start = np.zeros(len(crossing), dtype=bool)
     touches_start[beside_start] = True
@@ -150,21 +156,21 @@ def _slice_graph(surface: FailureSurface, joint: int, level: float, segment: int
     high = np.where(above[lower], lower, upper)
     low = np.where(above[lower], upper, lower)
     node = np.full(len(used), -1)
-    node[mixed & on_level[high]] = high[mixed & on_level[high]]
+    node[mixed & on_level[high]] = point_of[high[mixed & on_level[high]]]
     strict = mixed & ~on_level[high]
-    node[strict] = n_vertices + used[strict]
+    node[strict] = n_points_ + segment_of[used[strict]]
 
-    points = np.full((n_vertices + len(edges) + 1, vertices.shape[1]), np.nan)
-    points[:n_vertices] = vertices
+    points = np.full((n_points_ + int(segment_of.max()) + 2, vertices.shape[1]), np.nan)
+    points[point_of] = vertices
     lo, hi = vertices[low[strict]], vertices[high[strict]]
     t = (level - lo[:, joint]) / (hi[:, joint] - lo[:, joint])
-    points[n_vertices + used[strict]] = lo + t[:, None] * (hi - lo)
+    points[node[strict]] = lo + t[:, None] * (hi - lo)
     source = len(points) - 1
     points[source] = start
     points[:, joint] = level
 
     edge_node = node[np.searchsorted(used, triangle_edges)]
-    slots = np.concatenate([np.where(on_level[triangles], triangles, -1), edge_node,
+    slots = np.concatenate([np.where(on_level[triangles], point_of[triangles], -1), edge_node,
                             np.where(touches_start, source, -1)[:, None]], axis=1)
     u = slots[:, _SLOT_PAIRS[:, 0]].ravel()
     v = slots[:, _SLOT_PAIRS[:, 1]].ravel()
@@ -177,10 +183,11 @@ def _slice_graph(surface: FailureSurface, joint: int, level: float, segment: int
     weights = np.linalg.norm(points[u] - points[v], axis=1) + 1e-12
     graph = csr_matrix((weights, (local[:len(u)], local[len(u):-1])), shape=(len(ids), len(ids)))
 
-    n_paths, n_points = surface.paths.shape[:2]
+    n_paths, n_waypoints = surface.paths.shape[:2]
     goal_row = np.zeros(len(points), dtype=bool)
-    top = np.arange(n_paths) * n_points + n_points - 1
-    goal_row[top[on_level[top]]] = True
-    top_rungs = surface.rung_edge(np.arange(n_paths - 1), n_points - 1)
-    goal_row[n_vertices + top_rungs] = True  # strict crossings on the goal row's chords
+    top = np.arange(n_paths) * n_waypoints + n_waypoints - 1
+    goal_row[point_of[top[on_level[top]]]] = True
+    strips = np.flatnonzero(~surface.cuts)
+    top_rungs = surface.rung_edge(strips, n_waypoints - 1)
+    goal_row[n_points_ + segment_of[top_rungs]] = True  # strict crossings on the goal row's chords
     return points[ids], graph, np.flatnonzero(goal_row[ids])

@@ -114,7 +114,7 @@ class SurfaceSearch:
                 candidates = self._given_start(start_configuration)
             else:
                 candidates = self._start_candidates(M_s, subdivisions)
-            search = self._search(candidates, arc_points, arc_laps)
+            search = self._search_preferred(candidates, arc_points, arc_laps)
             stats.update(search.stats, start_candidates=len(candidates),
                          candidate_subdivisions=subdivisions or 1)
             if search.surface is not None or not arcs:
@@ -138,6 +138,24 @@ class SurfaceSearch:
             manifolds.append(tuple(mark_obstacle_free(b, self.checker, self.margin)
                                    for b in branches))
         return manifolds[0], manifolds[1]
+
+    # Issue 10: starts the caller prefers (approach.py: reachable from the arm along
+    # M_s^F) are searched first; all the candidates only when none of those plans.
+    prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def _search_preferred(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                          arc_laps: list[int]) -> _Search:
+        """Run `_search` on the candidates `prefer_starts` marks, then on all of them."""
+        if self.prefer_starts is not None:
+            preferred = candidates[np.asarray(self.prefer_starts(candidates), dtype=bool)]
+            search = self._search(preferred, arc_points, arc_laps) if len(preferred) else None
+            if search is not None and search.surface is not None:
+                return replace(search, stats=dict(search.stats, preferred_starts=len(preferred),
+                                                  start_preferred=True))
+        search = self._search(candidates, arc_points, arc_laps)
+        if self.prefer_starts is not None:
+            search = replace(search, stats=dict(search.stats, start_preferred=False))
+        return search
 
     # Steps 3-6 ----------------------------------------------------------------------
 
@@ -305,13 +323,14 @@ class SurfaceSearch:
                     hits[slot][k].append(FailurePlaneHit(i, theta, float(position)))
             for slot, c in enumerate(members):
                 for window in (w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]):
-                    fans.append(_coarse_fan(candidates[c], points, choose_hits(hits[slot], window),
-                                            window, self.robot.periodic,
-                                            self.options.coarse_waypoints))
+                    fans.append([h.theta for h in choose_hits(hits[slot], window)])
                     proposals.append((int(c), a, window))
         if not fans:
             return []
-        clearance = self.checker.min_clearance(np.vstack(fans), self.margin + _RANKING_CLEARANCE,
+        fans = _coarse_fans(candidates, arc_points, proposals, np.array(fans), self.joints,
+                            self.robot.periodic, self.options.coarse_waypoints)
+        clearance = self.checker.min_clearance(fans.reshape(-1, fans.shape[-1]),
+                                               self.margin + _RANKING_CLEARANCE,
                                                refine=False).reshape(len(fans), -1).min(axis=1)
         scored = [_Proposal(float(score), *proposal)
                   for score, proposal in zip(clearance, proposals, strict=True)
@@ -350,14 +369,34 @@ def _within_limits(robot, thetas: np.ndarray) -> np.ndarray:
     return np.all(inside | robot.periodic, axis=1)
 
 
-def _coarse_fan(theta_s: np.ndarray, arc_points: np.ndarray, hits: list[FailurePlaneHit],
-                window: tuple[float, float], periodic: np.ndarray, waypoints: int) -> np.ndarray:
-    """Points (m, n) [rad] of straight paths from θ_s to its hits and across the window."""
-    lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, hits, periodic)
-    spread = np.linspace(window[0], window[1], 5)
-    k = np.minimum(spread.astype(int), len(arc_points) - 2)
-    t = (spread - k)[:, None]
-    goals = np.vstack([[h.theta for h in lifted_hits],
-                       lifted[k] + t * (lifted[k + 1] - lifted[k])])
-    steps = np.arange(1, waypoints + 1)[:, None, None] / waypoints
-    return (theta_s + steps * (goals - theta_s)).reshape(-1, len(theta_s))
+def _coarse_fans(candidates: np.ndarray, arc_points: list[np.ndarray], proposals: list,
+                 hits: np.ndarray, joints: tuple[int, ...], periodic: np.ndarray,
+                 waypoints: int) -> np.ndarray:
+    """Points (P, m, n) [rad] of straight paths from each θ_s to its hits and across its window.
+
+    `proposals` are (candidate, arc, window) and `hits` (P, J, n) the chosen hit of each
+    tolerated joint; the arc and the hits are lifted as `lift_goal_arc` does.
+    """
+    theta_s = candidates[[c for c, _, _ in proposals]]  # (P, n)
+    joints = np.asarray(joints)
+    rows = np.arange(len(proposals))[:, None]
+    shift = np.zeros_like(theta_s)
+    turns = 2.0 * np.pi * np.round((theta_s[:, joints] - hits[rows, np.arange(len(joints)),
+                                                             joints]) / (2.0 * np.pi))
+    shift[:, joints] = np.where(periodic[joints], turns, 0.0)
+    lifted = hits + shift[:, None, :]
+    lifted[rows, np.arange(len(joints)), joints] = theta_s[:, joints]
+    spread = np.empty((len(proposals), 5, theta_s.shape[1]))
+    for a, points in enumerate(arc_points):
+        mine = np.array([p[1] == a for p in proposals])
+        if not mine.any():
+            continue
+        windows = np.array([p[2] for p in proposals])[mine]
+        at = windows[:, :1] + np.linspace(0.0, 1.0, 5)[None, :] * (windows[:, 1:] - windows[:, :1])
+        k = np.minimum(at.astype(int), len(points) - 2)
+        t = (at - k)[..., None]
+        spread[mine] = points[k] + t * (points[k + 1] - points[k])
+    goals = np.concatenate([lifted, spread + shift[:, None, :]], axis=1)  # (P, J+5, n)
+    steps = np.arange(1, waypoints + 1)[None, :, None, None] / waypoints
+    fans = theta_s[:, None, None, :] + steps * (goals[:, None] - theta_s[:, None, None, :])
+    return fans.reshape(len(proposals), -1, theta_s.shape[1])

@@ -13,12 +13,17 @@ reaches the goal. The proof has three parts, each checked here rather than trust
    the goal tolerances: the position error sampled plus a second-order bound between
    samples, the orientation error sampled plus a first-order bound (the tool turns at
    most Σ_a |θ̇_a|: every joint axis is a unit vector).
-3. A recovery path exists for every lock of a tolerated joint: the nominal path is
-   monotonic in every joint, the bottom row is exactly θ_s and the path to θ_{H_i} keeps
-   θ_i = θ_s,i exactly (the argument in `recovery.py`); and, as a check of the
-   implementation, `recover` is run at sampled moments of the nominal path for every
-   tolerated joint and each path it returns is certified collision-free and arriving,
-   like part 1.
+3. A recovery path exists for every lock of a tolerated joint. For the paper's fan (one
+   sheet): the nominal path is monotonic in every joint, the bottom row is exactly θ_s
+   and the path to θ_{H_i} keeps θ_i = θ_s,i exactly (the argument in `recovery.py`).
+   For any other web: the slice of S_F at every level the nominal path takes joins every
+   nominal point on it to the goal row, checked at each vertex value of θ_i and between
+   each two (`slices.py`). And, as a check of the implementation, `recover` is run at
+   sampled moments of the nominal path for every tolerated joint and each path it
+   returns is certified collision-free and arriving, like part 1.
+
+A web may hold several sheets (`FailureSurface.cuts`); part 1 covers the triangles of
+all of them, part 2 the goal row of each.
 
 Every number that enters is checked to be finite: a NaN or infinity anywhere fails the
 check.
@@ -37,6 +42,7 @@ from .paths import point_at_fraction
 from .recovery import recover
 from .robot import Robot, task_errors
 from .scene import Task
+from .slices import slice_problem
 
 # Certified clearance must beat the motion bound by this much [m]: absorbs the rounding
 # of the clearance computation (about 1e-8 m near contact).
@@ -143,6 +149,8 @@ def structure_problem(surface: FailureSurface) -> str:
     """Why the web cannot carry the recovery argument, or '' when it can."""
     paths = surface.paths
     theta_s = surface.theta_s
+    if surface.cuts.any():
+        return 'the web has more than one sheet'
     if not np.all(paths[:, 0] == theta_s):
         return 'the web paths do not all start at θ_s'
     steps = np.diff(surface.nominal_path, axis=0)
@@ -174,21 +182,27 @@ def certify_surface(surface: FailureSurface, checker: CollisionChecker, task: Ta
                     options: VerificationOptions | None = None) -> Verdict:
     """Parts 1, 2 and the structure of part 3 (see the module docstring) for the task's goal."""
     options = options or VerificationOptions()
-    problem = limits_problem(surface, checker.robot) or structure_problem(surface)
+    problem = limits_problem(surface, checker.robot)
+    if not problem and structure_problem(surface):
+        problem = slice_problem(surface, surface.tolerated)
     if problem:
         return Verdict(False, problem)
-    position, orientation = goal_row_error(checker.robot, task, surface.goal_points,
-                                           options.chord_samples)
+    position, orientation = 0.0, 0.0
+    for first, last in surface.sheets():
+        sheet = goal_row_error(checker.robot, task, surface.goal_points[first:last + 1],
+                               options.chord_samples)
+        position, orientation = max(position, sheet[0]), max(orientation, sheet[1])
     if not (position <= task.goal_tolerance and orientation <= task.orientation_tolerance):
         return Verdict(False, f'the goal row strays {position:.4f} m, {orientation:.4f} rad '
                        f'from the goal (tolerances {task.goal_tolerance} m, '
                        f'{task.orientation_tolerance} rad)', max_goal_error=position,
                        max_orientation_error=orientation)
-    corners = surface.vertices[surface.triangles]
+    triangles = _distinct_triangles(surface)
+    corners = surface.vertices[triangles]
     ok, failed, smallest, samples = certify_simplices(checker, corners, options.margin,
                                                       options.max_depth)
     if not ok:
-        path, waypoint = np.unravel_index(surface.triangles[failed, 0], surface.paths.shape[:2])
+        path, waypoint = np.unravel_index(triangles[failed, 0], surface.paths.shape[:2])
         return Verdict(False, f'S_F is not collision-free near path {path}, waypoint '
                        f'{waypoint}', min_clearance=smallest, max_goal_error=position,
                        max_orientation_error=orientation, clearance_samples=samples)
@@ -206,8 +220,7 @@ def check_recoveries(surface: FailureSurface, checker: CollisionChecker, task: T
     `certify_surface`; the returned verdict extends it.
     """
     options = options or VerificationOptions()
-    samples = certified.clearance_samples
-    recovery_clearance = np.inf
+    segments, owners, checks = [], [], []
     for progress in np.linspace(0.0, 1.0, options.recovery_moments):
         theta = point_at_fraction(surface.nominal_path, progress)
         for joint in surface.tolerated:
@@ -216,18 +229,23 @@ def check_recoveries(surface: FailureSurface, checker: CollisionChecker, task: T
             if rescue is None:
                 return replace(certified, ok=False, reason=f'{where}: no recovery path')
             arrival = task_errors(checker.robot, task.goal, rescue.path[-1])
-            segments = np.stack([rescue.path[:-1], rescue.path[1:]], axis=1)
-            clear, _, lowest, count = certify_simplices(checker, segments, options.margin,
-                                                        options.max_depth)
-            samples += count
-            if not clear or not task.reached(arrival):
-                why = 'collides' if not clear else \
-                    f'ends {arrival[0]:.4f} m, {arrival[1]:.4f} rad from the goal'
-                return replace(certified, ok=False, clearance_samples=samples,
-                               reason=f'{where}: the recovery path {why}')
-            recovery_clearance = min(recovery_clearance, lowest)
-    return replace(certified, recovery_min_clearance=float(recovery_clearance),
-                   clearance_samples=samples)
+            if not task.reached(arrival):
+                return replace(certified, ok=False, reason=f'{where}: the recovery path ends '
+                               f'{arrival[0]:.4f} m, {arrival[1]:.4f} rad from the goal')
+            segments.append(np.stack([rescue.path[:-1], rescue.path[1:]], axis=1))
+            owners.append(np.full(len(rescue.path) - 1, len(checks)))
+            checks.append(where)
+    if not segments:
+        return replace(certified, recovery_min_clearance=float('inf'))
+    # Every path's segments in one batch; the first that fails names its lock.
+    clear, failed, lowest, count = certify_simplices(checker, np.concatenate(segments),
+                                                     options.margin, options.max_depth)
+    samples = certified.clearance_samples + count
+    if not clear:
+        where = checks[int(np.concatenate(owners)[failed])]
+        return replace(certified, ok=False, clearance_samples=samples,
+                       reason=f'{where}: the recovery path collides')
+    return replace(certified, recovery_min_clearance=float(lowest), clearance_samples=samples)
 
 
 def verify_surface(surface: FailureSurface, checker: CollisionChecker, task: Task,
@@ -237,6 +255,15 @@ def verify_surface(surface: FailureSurface, checker: CollisionChecker, task: Tas
     if not certified.ok:
         return certified
     return check_recoveries(surface, checker, task, certified, options)
+
+
+def _distinct_triangles(surface: FailureSurface) -> np.ndarray:
+    """(T', 3) the live triangles of S_F, each set of three points once."""
+    triangles = surface.triangles[surface.live_triangles]
+    points = surface.vertex_ids[triangles]
+    keys = np.sort(points, axis=1)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return triangles[np.sort(first)]
 
 
 def _pieces(corners: np.ndarray) -> int:

@@ -12,8 +12,9 @@ import numpy as np
 from .collision import CollisionChecker
 from .curves import FrozenJoints
 from .manifolds import ManifoldOptions, trace_self_motion_manifolds
-from .robot import Robot, task_errors, task_residuals
+from .robot import PlanarChain, Robot, task_errors, task_residuals
 from .scene import Obstacle
+from .web_search import load_sheet_kernels
 
 
 def load_kernels(robot: Robot) -> None:
@@ -31,3 +32,5 @@ def load_kernels(robot: Robot) -> None:
     near = tuple(float(v) for v in robot.skeleton(theta)[-1])  # the tool: within reach
     obstacles = [Obstacle('sphere', near, radius=0.1), Obstacle('box', near, size=(0.1,) * 3)]
     CollisionChecker(robot, obstacles).clearance(np.stack([theta, theta]), needed=np.inf)
+    if isinstance(robot, PlanarChain) and robot.n_joints == 3:
+        load_sheet_kernels()  # the recovery sheets' grid, searches and slices

@@ -6,13 +6,17 @@ It keeps the last plan from the planner's latched topics (θ_s, the nominal traj
 the S_F web; the nominal path is the web path equal to the trajectory). A call of
 /ftplan/execute (std_srvs/Trigger):
 
-1. approaching: moves the arm to θ_s, along the start self-motion manifold M_s when the
-   end effector is already at x_s, else by the shortest collision-free straight joint
-   move (a joint without limits may turn either way);
+1. approaching: moves the arm to θ_s by the planner's approach (/ftplan/plan/approach)
+   when it starts where the arm stands, else by one the core plans now
+   (core/approach.py): along the obstacle-free arc of M_s through the arm when the end
+   effector is at x_s, else by a straight or an RRT-Connect joint move, each certified
+   collision-free;
 2. nominal: follows the nominal path to M_g^F;
 3. recovering: when a joint locks (/ftplan/locked_joint) during 2, it commands a stop,
    waits until /joint_states shows the arm standing still, asks the core's `recover`
-   for the path in S_F ∩ H_i from that configuration to M_g^F and commands it;
+   for the path in S_F ∩ H_i from that configuration to M_g^F and commands it. A lock
+   during 1 (not failure-tolerant) is handled alike, with a path to the goal planned
+   from where the arm stopped with the joints left (`path_to_goal`), when there is one;
 4. done (at the goal) or failed (with the reason).
 
 A lock of a joint the plan does not tolerate (the planner names the tolerated joints in
@@ -23,18 +27,25 @@ the core's task errors against the plan's goal (position [m] and, for axis and p
 tasks, orientation [rad]). A scene file without a robot takes it from
 /robot_description (scene_source.py); until then executions are refused.
 
-An execution is refused while a joint that locked in an earlier one has not been
-declared repaired (`~/reset`, std_srvs/Trigger: the approach would command it), and when
-the current obstacles (scene and /ftplan/obstacles) touch a vertex of the plan's S_F:
-the obstacles changed since the plan, so plan again.
+Locked joints are remembered in one place (locks.py) whatever the executor is doing,
+idle included, until they are declared repaired (`~/reset`, std_srvs/Trigger); no
+command that would move one is ever published, and an execution is refused while one is
+locked. An execution is also refused when the current obstacles (scene and
+/ftplan/obstacles) touch a vertex of the plan's S_F: the obstacles changed since the
+plan, so plan again. Obstacles that arrive during an execution are checked against the
+rest of the commanded motion (certified) and against S_F: on the approach the arm stops
+and a new approach is planned from where it stands; on the nominal or recovery path it
+stops there safely, and the execution fails with the reason. A second lock in one
+execution stops the arm safely too. When /joint_states stops for `joint_state_timeout`
+during an execution, a watchdog commands a stop and fails it.
 
 Commands go out on /ftplan/joint_command as JointTrajectory (strictly increasing times,
 the first point one step ahead of where the arm is), so a ros2_control
 joint_trajectory_controller can take them (remap the topic); an empty trajectory asks
 for a stop. Every state change, and the progress along the nominal path, is reported on
 /diagnostics as 'ftplan_executor: execution'. A lock before or after the nominal phase,
-a lock of an unknown joint and any malformed input are logged and reported, never
-fatal.
+a lock of an unknown joint and any malformed input (a joint state stamped before the
+epoch, a lock angle away from where the joint is) are logged and reported, never fatal.
 """
 
 from __future__ import annotations
@@ -47,7 +58,6 @@ from enum import StrEnum
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
-from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
@@ -69,11 +79,14 @@ from ftplan_ros.core import (
     Scene,
     load_kernels,
     recover,
-    self_motion_path,
     task_errors,
 )
+from ftplan_ros.core.approach import Approach, ApproachOptions, ApproachPlanner, Route
+from ftplan_ros.core.paths import cumulative_fractions, point_at_fraction
 
-from .motion import path_clearance, progress_along, straight_moves, time_path
+from .inputs import read_arm_state
+from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, JointLocks, lock_angle_problem
+from .motion import progress_along, time_path
 from .obstacles import ObstacleSet
 from .params import (
     add_validators,
@@ -82,12 +95,13 @@ from .params import (
     positive,
 )
 from .plan_info import PLANNER_STATUS, PlanInfos, join_names, read_plan_info
-from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
+from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
 from .scene_source import SceneSource
 from .spinning import run_node
 from .tasks import bind_task_kind
 from .topics import (
+    APPROACH,
     DIAGNOSTICS,
     EXECUTE_SERVICE,
     EXECUTOR_NODE,
@@ -103,8 +117,7 @@ from .topics import (
 )
 
 _DIAGNOSTICS_DEPTH = 50
-COLLISION_CHECK_STEP = 0.01  # [rad] between the clearance samples of an approach move
-ON_MANIFOLD_TOLERANCE = 1e-6  # [m, rad] the end effector counts as at x_s within this
+_REJECTION_REPORT_PERIOD = 1.0  # [s] a stream of bad joint states: one report per period
 
 
 class State(StrEnum):
@@ -152,6 +165,9 @@ class Execution:
     reason: str = ''
     approach: str = ''
     requested_ns: int = 0            # ROS time [ns] of the request; older joint states are stale
+    lock_phase: State | None = None  # the phase the lock came in
+    commanded: float = 0.0           # monotonic [s] of the last command
+    reapproach: bool = False         # stopped on the approach (an obstacle): approach again
 
     @property
     def nominal(self) -> np.ndarray:
@@ -174,13 +190,17 @@ class ExecutorNode(Node):
         self.plan_infos = PlanInfos()
         self.execution: Execution | None = None
         self.executions = 0
-        self.locked_joints: set[int] = set()  # locked in an execution, not yet repaired
+        self.locks = JointLocks([])  # locked, not yet repaired: the one place (locks.py)
         self.q: np.ndarray | None = None
         self._previous_q: np.ndarray | None = None
+        self._last_joint_state = 0.0  # monotonic [s] of the last good joint state
+        self._last_motion = 0.0  # monotonic [s] of the last joint state that moved
+        self._last_rejection_report = 0.0
         self._obstacles = ObstacleSet(None)
         self._start_msg: JointState | None = None
         self._trajectory_msg: JointTrajectory | None = None
         self._surface_msg: Float64MultiArray | None = None
+        self._approach_msg: JointTrajectory | None = None
         self._last_status = 0.0
         if self.source.scene is not None:
             self._use_scene(self.source.scene)
@@ -205,6 +225,18 @@ class ExecutorNode(Node):
                 'Seconds to wait for the arm to stop after a lock before failing.')
         declare(self, 'start_timeout', 5.0,
                 'Seconds an execution waits for a joint state stamped after its request.')
+        declare(self, 'joint_state_timeout', 2.0,
+                'Seconds without a joint state during an execution after which the watchdog '
+                'commands a stop and fails the execution.')
+        declare(self, 'stall_timeout', 5.0,
+                'Seconds the arm may stand still short of the end of a command before the '
+                'execution fails (the controller dropped it, or the arm was reset).')
+        declare(self, 'lock_angle_tolerance', DEFAULT_LOCK_ANGLE_TOLERANCE,
+                'Farthest a lock event\'s angle may be from where the joint is [rad]; events '
+                'beyond it are refused (a joint locks where it stands).')
+        declare(self, 'approach_time', 1.0,
+                'Budget [s] of each of the three RRT-Connect attempts of an approach (or, '
+                'after a lock during it, of a path to the goal with the joints left).')
         declare(self, 'status_rate', 10.0,
                 'Rate [Hz] of the progress reports on /diagnostics while executing (1 Hz when '
                 'idle).', read_only=True)
@@ -213,7 +245,8 @@ class ExecutorNode(Node):
                 'tolerated joints of each plan).')
         validators = {name: positive for name in (
             'max_joint_speed', 'arrival_tolerance', 'max_path_offset', 'path_tolerance',
-            'stopped_tolerance', 'stop_timeout', 'start_timeout', 'status_rate')}
+            'stopped_tolerance', 'stop_timeout', 'start_timeout', 'status_rate',
+            'joint_state_timeout', 'stall_timeout', 'lock_angle_tolerance', 'approach_time')}
         check_startup_parameters(self, validators)
         add_validators(self, validators)
 
@@ -232,11 +265,14 @@ class ExecutorNode(Node):
             JointTrajectory, TRAJECTORY, self.trajectory_callback, LATCHED_QOS)
         self.surface_subscription = self.create_subscription(
             Float64MultiArray, FAILURE_SURFACE, self.failure_surface_callback, LATCHED_QOS)
+        self.approach_subscription = self.create_subscription(
+            JointTrajectory, APPROACH, self.approach_callback, LATCHED_QOS)
         self.diagnostics_subscription = self.create_subscription(
             DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, _DIAGNOSTICS_DEPTH)
         self.execute_service = self.create_service(
-            Trigger, EXECUTE_SERVICE, self.execute_callback)
-        self.reset_service = self.create_service(Trigger, RESET_SERVICE, self.reset_callback)
+            Trigger, EXECUTE_SERVICE, self.execute_callback, qos_profile=SERVICE_QOS)
+        self.reset_service = self.create_service(Trigger, RESET_SERVICE, self.reset_callback,
+                                                 qos_profile=SERVICE_QOS)
         rate = float(self.get_parameter('status_rate').value)
         self.status_timer = self.create_timer(1.0 / rate, self.status_callback)
 
@@ -249,7 +285,7 @@ class ExecutorNode(Node):
         names = list(scene.robot.joint_names)
         if names != self.names:  # another arm: nothing of the old one applies
             self.plan = self.execution = None
-            self.locked_joints.clear()
+            self.locks = JointLocks(names)
             self.q = self._previous_q = None
         self.scene, self.names = scene, names
         for problem in problems:
@@ -297,6 +333,10 @@ class ExecutorNode(Node):
         self._surface_msg = msg
         self._assemble_plan()
 
+    def approach_callback(self, msg: JointTrajectory) -> None:
+        """Keep the planner's approach to θ_s of the latest plan (used if it starts here)."""
+        self._approach_msg = msg
+
     def _assemble_plan(self) -> None:
         """Hold a new plan once θ_s, trajectory and S_F of one plan have all arrived."""
         start, trajectory, surface = self._start_msg, self._trajectory_msg, self._surface_msg
@@ -339,12 +379,67 @@ class ExecutorNode(Node):
                 self.plan_infos.add(info)
 
     def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Keep the obstacle topic, for checking approach moves and the held plan's S_F."""
+        """Keep the obstacle topic; during an execution, check the rest of the motion."""
         try:
             self._obstacles.update(msg)
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
                                       f'the {len(self._obstacles)} previous')
+            return
+        if self.state in ACTIVE:
+            try:
+                self._check_new_obstacles()
+            except Exception as error:  # noqa: BLE001 - a callback must never raise
+                self.get_logger().error(traceback.format_exc())
+                self._stop()
+                self._fail(f'internal executor error: {error!r}')
+
+    def _check_new_obstacles(self) -> None:
+        """Stop when new obstacles meet the rest of the motion or (before a lock) S_F.
+
+        On the approach the arm then approaches θ_s again from where it stops; on the
+        nominal or recovery path it stays stopped and the execution fails.
+        """
+        ex = self.execution
+        problem = ''
+        rest = self._rest_of_command()
+        if rest is not None and not self._approach_planner().certify(rest):
+            problem = 'an obstacle that arrived meets the rest of the motion'
+        elif self.state != State.RECOVERING and self._surface_meets_obstacle(ex.surface):
+            problem = 'an obstacle that arrived meets the failure surface S_F: the rest of ' \
+                'the motion would not be failure-tolerant'
+        if not problem:
+            return
+        self._stop()
+        if self.state == State.APPROACHING and not self._surface_meets_obstacle(ex.surface):
+            ex.command, ex.reapproach = None, True
+            self._set_state(State.APPROACHING, f'{problem} while approaching theta_s: stopped; '
+                            'approaching again from where the arm stands', level='WARN')
+            return
+        self._fail(f'{problem} ({self.state.value}, {ex.progress:.1%} of the nominal path): '
+                   'stopped there; plan again')
+
+    def _rest_of_command(self) -> np.ndarray | None:
+        """Return the part (k, n) [rad] of the command still ahead of the arm, if any."""
+        ex = self.execution
+        if ex.command is None or self.q is None or len(ex.command) < 2:
+            return None
+        fraction, _ = progress_along(ex.command, self.q)
+        ahead = ex.command[cumulative_fractions(ex.command) > fraction]
+        return np.vstack([point_at_fraction(ex.command, fraction)[None, :], ahead])
+
+    def _surface_meets_obstacle(self, surface: FailureSurface) -> bool:
+        """Whether a vertex of S_F touches the current obstacles."""
+        return bool(self._obstacles.checker.min_clearance(surface.vertices,
+                                                          needed=0.0).min() <= 0.0)
+
+    def _approach_planner(self) -> ApproachPlanner:
+        """Return the core's approach planner over the scene and the current obstacles."""
+        plan = self.execution.plan if self.execution is not None else self.plan
+        return ApproachPlanner(
+            self._obstacles.checker,
+            ApproachOptions(rrt_time=float(self.get_parameter('approach_time').value)),
+            robot=self._plan_robot(plan) if plan is not None else None)
 
     # Execution ----------------------------------------------------------------------
 
@@ -368,8 +463,7 @@ class ExecutorNode(Node):
             response.message = f'execution {self.execution.number} is {self.state.value}'
             self.diagnostics.rejected('input', f'reset refused: {response.message}')
             return response
-        repaired = [self.names[j] for j in sorted(self.locked_joints)]
-        self.locked_joints.clear()
+        repaired = self.locks.clear()
         response.success = True
         response.message = f'repaired: {repaired}' if repaired else 'no joint was locked'
         self.report_status(f'reset: {response.message}', log=True)
@@ -382,12 +476,11 @@ class ExecutorNode(Node):
             return False, self.source.waiting
         if self.plan is None:
             return False, 'no plan yet: call the plan service (/ftplan/plan) first'
-        if self.locked_joints:
-            locked = [self.names[j] for j in sorted(self.locked_joints)]
-            return False, (f'{locked} locked in execution {self.execution.number} and would be '
-                           f'commanded: call {self.get_name()}/reset once repaired')
-        if self._obstacles.checker.min_clearance(self.plan.surface.vertices,
-                                                 needed=0.0).min() <= 0.0:
+        if self.locks:
+            locked = [self.names[j] for j in self.locks.joints]
+            return False, (f'{locked} locked ({self.locks.describe()}) and would be commanded: '
+                           f'call {self.get_name()}/reset once repaired')
+        if self._surface_meets_obstacle(self.plan.surface):
             return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
                            'surface now meets one; plan again')
         self.executions += 1
@@ -403,11 +496,15 @@ class ExecutorNode(Node):
         """Command the approach to θ_s from q (or the nominal path if the arm is there)."""
         ex = self.execution
         plan = ex.plan
-        approach, how = self._approach(q, plan.theta_s)
-        ex.approach = how
-        if approach is None:
-            self._fail(how)
+        ex.reapproach = False
+        found = self._approach(q, plan.theta_s)
+        ex.approach = found.describe()
+        if not found.ok:
+            self._fail(f'no collision-free approach to theta_s from where the arm stands: '
+                       f'{found.reason}')
             return
+        approach = found.path.copy()
+        how = f'approaching theta_s {ex.approach}'
         # The approach may end whole turns away from θ_s: shift S_F to the arm's lift.
         turns = np.where(self.scene.robot.periodic,
                          np.round((approach[-1] - plan.theta_s) / (2.0 * np.pi)), 0.0)
@@ -418,46 +515,61 @@ class ExecutorNode(Node):
         self.get_logger().info(f'execution {ex.number} of plan {plan.key}: {how}')
         if len(approach) < 2:
             self._begin_nominal()
-        else:
-            self._command(approach)
+        elif self._command(approach):
             self._set_state(State.APPROACHING, how)
 
-    def _approach(self, q: np.ndarray, theta_s: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """Find a collision-free path (k, n) from q to θ_s plus whole turns; say how it goes.
+    def _approach(self, q: np.ndarray, theta_s: np.ndarray) -> Approach:
+        """Find a certified path (k, n) from q to θ_s plus whole turns (core/approach.py).
 
-        A single point (1, n) means the arm is at θ_s already. Along M_s only with one
-        degree of redundancy (M_s is then a curve).
+        The planner's approach of this plan is taken when it starts where the arm stands
+        and is still clear of the obstacles; else one is planned now. A single point
+        (1, n) means the arm is at θ_s already.
         """
-        robot = self._plan_robot(self.execution.plan)
-        moves = straight_moves(q, theta_s, robot.periodic)
-        if np.max(np.abs(moves[0][-1] - q)) <= \
-                float(self.get_parameter('arrival_tolerance').value):
-            return moves[0][-1:].copy(), 'already at theta_s'
-        x_s = robot.forward_kinematics(theta_s)
-        if robot.n_joints - robot.task_dim == 1 and \
-                np.all(task_errors(robot, x_s, q) <= ON_MANIFOLD_TOLERANCE):
-            path = self_motion_path(robot, x_s, q, theta_s)
-            if path is not None and \
-                    path_clearance(self._obstacles.checker, path, COLLISION_CHECK_STEP) > 0.0:
-                return path.copy(), f'approaching theta_s along M_s ({len(path)} points)'
-        for move in moves:
-            if path_clearance(self._obstacles.checker, move, COLLISION_CHECK_STEP) > 0.0:
-                return move, 'approaching theta_s by a straight joint move'
-        return None, ('no collision-free approach to theta_s: neither along M_s nor by a '
-                      'straight joint move')
+        arrival = float(self.get_parameter('arrival_tolerance').value)
+        planner = self._approach_planner()
+        given = self._planned_approach()
+        if given is not None and np.max(np.abs(given[0] - q)) <= arrival and \
+                np.max(np.abs(given[-1] - theta_s)) <= arrival:
+            given[0] = q
+            if planner.certify(given):
+                return Approach(given, Route.GIVEN)
+        return planner.approach(q, theta_s, arrival)
+
+    def _planned_approach(self) -> np.ndarray | None:
+        """Return the planner's approach path (k, n) of the executed plan, if it sent one."""
+        msg = self._approach_msg
+        if msg is None or stamp_key(msg.header.stamp) != self.execution.plan.key or \
+                not msg.points:
+            return None
+        try:
+            return read_joint_trajectory(msg, self.names).positions
+        except ValueError:
+            return None
 
     def _begin_nominal(self) -> None:
         ex = self.execution
-        self._command(ex.nominal)
-        self._set_state(State.NOMINAL, 'following the nominal path')
+        if self._command(ex.nominal):
+            self._set_state(State.NOMINAL, 'following the nominal path')
 
-    def _command(self, path: np.ndarray) -> None:
-        """Command `path` (k, n), whose first point is where the arm is."""
+    def _command(self, path: np.ndarray) -> bool:
+        """Command `path` (k, n), whose first point is where the arm is; False if refused.
+
+        A path that would move a locked joint is never published: the arm is stopped and
+        the execution fails instead (that would be a bug of the executor).
+        """
+        moved = self.locks.moved(path)
+        if moved:
+            self._stop()
+            self._fail(f'refused to command a path that moves locked joint {moved}: the arm '
+                       'is stopped (please report)')
+            return False
         speed = float(self.get_parameter('max_joint_speed').value)
         times = time_path(path, speed)
         self.execution.command = path
+        self.execution.commanded = time.monotonic()
         self.command_publisher.publish(
             create_joint_trajectory(self.names, path[1:], times[1:]))
+        return True
 
     def _stop(self) -> None:
         """Ask the controller to stop: an empty trajectory."""
@@ -478,19 +590,30 @@ class ExecutorNode(Node):
         if not self.names or not set(msg.name) & set(self.names):
             return
         try:
-            q = read_joint_state(msg, self.names)
+            q, stamp_ns = read_arm_state(msg, self.scene.robot)
         except ValueError as error:
-            self.get_logger().warning(f'rejected joint state: {error}', throttle_duration_sec=5.0)
+            self._reject_joint_state(str(error))
             return
         self._previous_q, self.q = self.q, q
+        self._last_joint_state = time.monotonic()
+        if not self._standing(q):
+            self._last_motion = self._last_joint_state
         if self.state not in ACTIVE:
             return
         try:
-            self._track(q, Time.from_msg(msg.header.stamp).nanoseconds)
+            self._track(q, stamp_ns)
         except Exception as error:  # noqa: BLE001
             self.get_logger().error(traceback.format_exc())
             self._stop()
             self._fail(f'internal executor error: {error!r}')
+
+    def _reject_joint_state(self, problem: str) -> None:
+        """Log a rejected joint state and report it, at most once per second."""
+        self.get_logger().warning(f'rejected joint state: {problem}', throttle_duration_sec=5.0)
+        now = time.monotonic()
+        if now - self._last_rejection_report >= _REJECTION_REPORT_PERIOD:
+            self._last_rejection_report = now
+            self.diagnostics.report('input', 'WARN', f'rejected joint state: {problem}')
 
     def _track(self, q: np.ndarray, stamp_ns: int) -> None:
         ex = self.execution
@@ -500,6 +623,9 @@ class ExecutorNode(Node):
         if ex.command is None:
             if ex.locked_joint is not None:
                 self._wait_for_stop(q)
+            elif ex.reapproach:
+                if self._standing(q):
+                    self._start_motion(q)
             elif self.state == State.APPROACHING and (stamp_ns == 0 or
                                                       stamp_ns >= ex.requested_ns):
                 self._start_motion(q)
@@ -521,9 +647,7 @@ class ExecutorNode(Node):
         """Done: report the task errors [m, rad] from the plan's goal (its end, if unknown)."""
         ex = self.execution
         robot = self._plan_robot(ex.plan)
-        info = self.plan_infos.get(ex.plan.key)
-        goal = info.goal if info is not None and len(info.goal) == len(
-            robot.forward_kinematics(q)) else robot.forward_kinematics(ex.nominal[-1])
+        goal = self._plan_goal(ex.plan)
         ex.finished = time.monotonic()
         ex.goal_error, ex.goal_orientation_error = (
             float(v) for v in task_errors(robot, goal, q))
@@ -548,40 +672,58 @@ class ExecutorNode(Node):
                                       f'the arm has {self.names}', {'joint': event.name})
             return
         joint = self.names.index(event.name)
+        current = None if self.q is None else float(self.q[joint])
+        problem = lock_angle_problem(event.name, event.angle, current,
+                                     bool(self.scene.robot.periodic[joint]),
+                                     float(self.get_parameter('lock_angle_tolerance').value))
+        if problem:
+            self.diagnostics.rejected('input', f'ignored locked-joint event: {problem}',
+                                      {'joint': event.name})
+            return
         ex = self.execution
-        if self.state not in ACTIVE:
-            what = 'no execution is running' if self.state == State.IDLE else \
-                f'execution {ex.number} is {self.state.value}'
-            self.diagnostics.rejected('input', f'ignored lock of {event.name}: {what}',
-                                      {'joint': event.name, 'state': self.state.value})
+        active = self.state in ACTIVE
+        if not self.locks.lock(joint, current, ex.number if active else None):
+            return  # the same failure reported again
+        if not active:
+            self.report_status(f'{event.name} locked while no execution is running: '
+                               'remembered; executions are refused until '
+                               f'{self.get_name()}/reset declares it repaired', 'WARN', log=True)
             return
-        self.locked_joints.add(joint)
-        if self.state == State.APPROACHING:
-            self._stop()
-            ex.locked_joint, ex.lock_received = joint, time.monotonic()
-            self._fail(f'{event.name} locked while approaching theta_s, before the '
-                       'failure-tolerant nominal path began: no recovery is guaranteed')
-            return
-        if self.state == State.RECOVERING:
-            if joint == ex.locked_joint:
-                return  # the same failure reported again
+        if ex.locked_joint is not None:
             self._stop()
             self._fail(f'{event.name} locked after {self.names[ex.locked_joint]}: a second '
-                       'failure is beyond the single-failure guarantee')
+                       'failure is beyond the single-failure guarantee; the arm is stopped '
+                       'safely where it is')
             return
         self._stop()
         ex.locked_joint, ex.lock_received = joint, time.monotonic()
         ex.stop_requested = ex.lock_received
+        ex.lock_phase = self.state
         ex.command = None
-        self._set_state(State.RECOVERING, f'{event.name} locked at about {ex.progress:.1%} '
-                        'of the nominal path: stopping')
+        if self.state == State.APPROACHING:
+            message = (f'{event.name} locked while approaching theta_s, before the '
+                       'failure-tolerant nominal path began: stopping, then planning a path to '
+                       'the goal with the joints left (not failure-tolerant)')
+        else:
+            message = f'{event.name} locked at about {ex.progress:.1%} of the nominal path: ' \
+                'stopping'
+        self._set_state(State.RECOVERING, message, level='WARN' if ex.lock_phase ==
+                        State.APPROACHING else 'OK')
+
+    def _standing(self, q: np.ndarray) -> bool:
+        """Whether the last two joint states show the arm standing still."""
+        previous = self._previous_q
+        return previous is not None and np.max(np.abs(q - previous)) <= \
+            float(self.get_parameter('stopped_tolerance').value)
 
     def _wait_for_stop(self, q: np.ndarray) -> None:
-        previous = self._previous_q
-        if previous is None or np.max(np.abs(q - previous)) > \
-                float(self.get_parameter('stopped_tolerance').value):
+        if not self._standing(q):
             return
         ex = self.execution
+        self.locks.settle(q)
+        if ex.lock_phase == State.APPROACHING:
+            self._replan_with_joints_left(q)
+            return
         joint = ex.locked_joint
         ex.lock_progress, _ = progress_along(ex.nominal, q)
         ex.progress = ex.lock_progress
@@ -600,12 +742,38 @@ class ExecutorNode(Node):
             self._fail(self._no_recovery(name, tolerated, untolerated, problem))
             return
         ex.recovery_length = rescue.length
-        self._command(rescue.path)
+        if not self._command(rescue.path):
+            return
         note = ' (not tolerated by this plan, but S_F holds a recovery path)' if untolerated \
             else ''
         self._set_state(State.RECOVERING, f'{name} locked at {ex.lock_progress:.1%} of the '
                         f'nominal path{note}: following the recovery path ({len(rescue.path)} '
                         f'points, {rescue.length:.3f} rad)')
+
+    def _replan_with_joints_left(self, q: np.ndarray) -> None:
+        """After a lock on the approach: a path to the goal with the locked joint held."""
+        ex = self.execution
+        joint = ex.locked_joint
+        name = self.names[joint]
+        ex.lock_configuration = q.copy()
+        found = self._approach_planner().path_to_goal(q, self._plan_goal(ex.plan), joint)
+        if not found.ok:
+            self._stop()  # the arm stands still: keep it so
+            self._fail(f'{name} locked while approaching theta_s (not failure-tolerant) and '
+                       f'{found.reason}; the arm is stopped where it is')
+            return
+        ex.recovery_length = found.length
+        if self._command(found.path):
+            self._set_state(State.RECOVERING, f'{name} locked while approaching theta_s: '
+                            f'following a path to the goal with the joints left, '
+                            f'{found.describe()} (not failure-tolerant)', level='WARN')
+
+    def _plan_goal(self, plan: HeldPlan) -> np.ndarray:
+        """Return the plan's goal task point: its status's, else its nominal path's end."""
+        robot = self._plan_robot(plan)
+        info = self.plan_infos.get(plan.key)
+        end = robot.forward_kinematics(plan.surface.nominal_path[-1])
+        return info.goal if info is not None and len(info.goal) == len(end) else end
 
     def _no_recovery(self, name: str, tolerated: tuple[str, ...] | None, untolerated: bool,
                      problem: str) -> str:
@@ -642,8 +810,30 @@ class ExecutorNode(Node):
             self._fail('the arm did not stop after the lock (no two equal joint states within '
                        'stop_timeout)')
             return
+        if self._joint_states_stopped():
+            self._stop()
+            self._fail(f'watchdog: no joint state for more than '
+                       f'{self.get_parameter("joint_state_timeout").value} s '
+                       '(joint_state_timeout) while the arm was commanded: stop commanded')
+            return
+        if self.state in ACTIVE and ex.command is not None and time.monotonic() - max(
+                ex.commanded, self._last_motion) > float(
+                    self.get_parameter('stall_timeout').value):
+            self._stop()
+            self._fail(f'the arm stands still short of the end of the command while '
+                       f'{self.state.value} (stall_timeout): stopped there')
+            return
         if self.state in ACTIVE or time.monotonic() - self._last_status >= 1.0:
             self.report_status(self.state.value)
+
+    def _joint_states_stopped(self) -> bool:
+        """Whether /joint_states went quiet during an execution that has started moving."""
+        ex = self.execution
+        if self.state not in ACTIVE or (self.state == State.APPROACHING and
+                                        ex.command is None and not ex.reapproach):
+            return False  # not moving yet: start_timeout's case
+        quiet = time.monotonic() - max(self._last_joint_state, ex.started)
+        return quiet > float(self.get_parameter('joint_state_timeout').value)
 
     def _set_state(self, state: State, message: str, level: str = 'OK') -> None:
         self.state = state
@@ -661,9 +851,12 @@ class ExecutorNode(Node):
             if ex.locked_joint is not None:
                 values['locked_joint'] = self.names[ex.locked_joint]
             if ex.lock_progress is not None:
-                values.update(lock_progress=ex.lock_progress,
-                              lock_configuration=format_vector(ex.lock_configuration),
+                values['lock_progress'] = ex.lock_progress
+            if ex.lock_configuration is not None:
+                values.update(lock_configuration=format_vector(ex.lock_configuration),
                               recovery_length_rad=ex.recovery_length)
+            if ex.lock_phase is not None:
+                values['lock_phase'] = ex.lock_phase.value
             if ex.finished is not None:
                 values['duration_s'] = ex.finished - ex.started
                 if ex.lock_received is not None and self.state == State.DONE:
@@ -673,9 +866,8 @@ class ExecutorNode(Node):
                               goal_orientation_error_rad=ex.goal_orientation_error)
             if ex.reason:
                 values['reason'] = ex.reason
-        if self.locked_joints:
-            values['locked_joints'] = join_names([self.names[j]
-                                                  for j in sorted(self.locked_joints)])
+        if self.locks:
+            values['locked_joints'] = join_names([self.names[j] for j in self.locks.joints])
         plan = ex.plan if ex is not None else self.plan
         tolerated = None if plan is None else self._tolerated(plan)
         if tolerated is not None:

@@ -43,10 +43,10 @@ from trajectory_msgs.msg import JointTrajectory
 from ftplan_msgs_py import (
     create_locked_joint,
     read_diagnostic_status,
-    read_joint_state,
     read_joint_trajectory,
 )
 
+from .inputs import read_arm_state
 from .motion import progress_along
 from .params import (
     add_validators,
@@ -305,9 +305,9 @@ class InjectorNode(Node):
                 self.nominal is None or self.names is None:
             return
         try:
-            q = read_joint_state(msg, self.names)
+            q, _ = read_arm_state(msg, self.scene.robot, self.names)
         except ValueError:
-            return
+            return  # a drill waits for the arm's own joint states
         progress, _ = progress_along(self.nominal, q, self.scene.robot.periodic)
         if progress >= self.drill.fraction:
             self._fire(f'at {progress:.1%} of the nominal path')

@@ -1,17 +1,13 @@
-"""Joint-path helpers of the nodes: timing, progress along a path, approach moves.
+"""Joint-path helpers of the nodes: timing and progress along a path.
 
 Paths are (k, n) [rad], lifted (continuous); joints flagged periodic wrap every 2π.
 """
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
-from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.angles import configuration_difference
-from ftplan_ros.core.paths import densify
 
 MIN_STEP_TIME = 1e-3  # [s] keeps the times of a trajectory strictly increasing
 
@@ -49,32 +45,3 @@ def progress_along(path: np.ndarray, q: np.ndarray, periodic: np.ndarray | None 
     if total == 0.0:
         return 1.0, float(gaps[best])
     return float((lengths[:best].sum() + t[best] * lengths[best]) / total), float(gaps[best])
-
-
-def straight_moves(q: np.ndarray, target: np.ndarray, periodic: np.ndarray) -> list[np.ndarray]:
-    """Straight joint moves (2, n) from q to target, shortest first.
-
-    A periodic joint may reach its target turning either way: each choice ends at the
-    target plus whole turns, so the last point of a move may differ from `target` by 2π.
-    """
-    q = np.asarray(q, dtype=float)
-    nearest = q + configuration_difference(target, q, periodic)
-    options = []
-    for j in range(len(q)):
-        if periodic[j] and nearest[j] != q[j]:
-            other = nearest[j] - np.sign(nearest[j] - q[j]) * 2.0 * np.pi
-            options.append((nearest[j], other))
-        else:
-            options.append((nearest[j],))
-    ends = [np.array(choice) for choice in itertools.product(*options)]
-    ends.sort(key=lambda end: float(np.linalg.norm(end - q)))
-    return [np.vstack([q, end]) for end in ends]
-
-
-def path_clearance(checker: CollisionChecker, path: np.ndarray, max_step: float) -> float:
-    """Smallest clearance [m] along `path`, sampled at most `max_step` [rad] apart.
-
-    Exact when <= 0, else a lower bound: enough to tell whether the path is clear, and
-    cheap (the checker's fine tier runs only where its screen finds a contact).
-    """
-    return float(checker.min_clearance(densify(path, max_step), needed=0.0).min())

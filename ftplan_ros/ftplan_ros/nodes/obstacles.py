@@ -8,7 +8,8 @@ length sz. Orientations become roll, pitch, yaw [rad].
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import hashlib
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -54,6 +55,18 @@ def shape_from_obstacle(key: ObstacleKey, obstacle: Obstacle) -> ObstacleShape:
         scale = np.array([2.0 * obstacle.radius, 2.0 * obstacle.radius, obstacle.length])
     return ObstacleShape(key, obstacle.shape, np.array(obstacle.center, dtype=float), scale,
                          quaternion_from_rpy(obstacle.rpy))
+
+
+def obstacle_set_key(obstacles: Sequence[Obstacle]) -> str:
+    """Name a set of obstacles (in order) by a digest of every number: 12 hex digits.
+
+    The planner's plan status carries it, so that a client can tell which obstacles a plan
+    was made for (the load benchmark checks each plan against them).
+    """
+    text = repr([(o.shape, tuple(map(float, o.center)), float(o.radius),
+                  tuple(map(float, o.size)), float(o.length), tuple(map(float, o.rpy)))
+                 for o in obstacles])
+    return hashlib.sha1(text.encode(), usedforsecurity=False).hexdigest()[:12]
 
 
 class ObstacleSet:

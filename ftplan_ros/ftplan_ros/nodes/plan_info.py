@@ -11,6 +11,8 @@ status 'ftplan_planner: plan' (stamped like the plan):
 | `start`, `goal` | task points '[x, y, ...]' (task_space.py) |
 | `tolerance`, `orientation_tolerance` | [m], [rad] |
 | `tolerated_joints` | joint names, comma-separated (e.g. 'joint1,joint3') |
+| `obstacles`, `obstacle_set` | how many obstacles, and a digest naming them (obstacles.py) |
+| `approach` | how the arm gets to θ_s from where it stood (core/approach.py) |
 
 The executor reads them to judge arrival and to name an untolerated lock, and repeats
 `tolerated_joints` in its execution status, which the injector reads for random drills.
@@ -74,15 +76,24 @@ def plan_info_values(task: Task, tolerated: Sequence[str]) -> dict[str, object]:
 
 
 def read_plan_info(values: Mapping[str, str]) -> PlanInfo | None:
-    """Read a plan status's values; None when they do not describe a plan."""
+    """Read a plan status's values; None when they do not describe a plan.
+
+    Every number must be finite, and the tolerances positive.
+    """
     try:
-        return PlanInfo(values['stamp'], values['task_kind'],
+        info = PlanInfo(values['stamp'], values['task_kind'],
                         np.array(parse_vector(values['start'])),
                         np.array(parse_vector(values['goal'])), float(values['tolerance']),
                         float(values['orientation_tolerance']),
                         split_names(values['tolerated_joints']))
     except (KeyError, ValueError):
         return None
+    numbers = np.concatenate([info.start, info.goal])
+    if not (np.all(np.isfinite(numbers)) and info.goal_tolerance > 0.0 and
+            info.orientation_tolerance > 0.0 and np.isfinite(info.goal_tolerance) and
+            np.isfinite(info.orientation_tolerance)):
+        return None
+    return info
 
 
 class PlanInfos:
@@ -93,7 +104,9 @@ class PlanInfos:
         self._infos: OrderedDict[str, PlanInfo] = OrderedDict()
 
     def add(self, info: PlanInfo) -> None:
-        """Keep `info`."""
+        """Keep `info`; the first info of a stamp stays (the planner sends one per plan)."""
+        if info.stamp in self._infos:
+            return
         self._infos[info.stamp] = info
         self._infos.move_to_end(info.stamp)
         while len(self._infos) > self.size:

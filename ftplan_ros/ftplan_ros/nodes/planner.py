@@ -20,10 +20,21 @@ spatial arms); an empty Path means there is no failure-tolerant plan, and the re
 logged and reported on /diagnostics. A plan found is also published, latched, right
 after the response on /ftplan/plan/start_configuration (θ_s, stamped like the Path),
 /ftplan/plan/trajectory (the nominal joint path, timed by `max_joint_speed`, stamped
-likewise) and /ftplan/plan/failure_surface (S_F), and 50 ms later on
-/ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does). Its
-task, tolerances and tolerated joints are values of the 'ftplan_planner: plan' status
-(plan_info.py). A failed request leaves the last good plan's topics as they were.
+likewise), /ftplan/plan/failure_surface (S_F) and /ftplan/plan/approach, and 50 ms later
+on /ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does).
+Its task, tolerances, tolerated joints, obstacle set and approach are values of the
+'ftplan_planner: plan' status (plan_info.py). A failed request leaves the last good
+plan's topics as they were.
+
+The arm where it stands (`approach`, default on): with a joint state, the planner prefers
+a θ_s the arm reaches from it along M_s^F (the end effector staying at x_s), else one a
+collision-free joint move reaches (core/approach.py), and publishes that approach, timed
+and stamped like the plan, on /ftplan/plan/approach (no points: none found, or no joint
+state); the status says how it goes (`approach`). The approach is not failure-tolerant.
+
+Requests wait in a queue of SERVICE_QUEUE_DEPTH (qos.py) and are planned one at a time;
+`plan_timeout` [s] bounds each: the search stops at its next stage past it and the
+request is answered with an empty Path and the reason.
 
 A scene file without a robot takes it from /robot_description (scene_source.py); until
 then every request is refused with "waiting for /robot_description".
@@ -35,6 +46,7 @@ while it works on a MultiThreadedExecutor.
 from __future__ import annotations
 
 import threading
+import time
 import traceback
 
 import numpy as np
@@ -57,7 +69,6 @@ from ftplan_msgs_py import (
     create_obstacle_markers,
     create_path,
     create_plan_markers,
-    read_joint_state,
     read_point,
     read_quaternion,
 )
@@ -73,14 +84,17 @@ from ftplan_ros.core import (
     load_kernels,
     plan,
 )
+from ftplan_ros.core.approach import Approach, ApproachOptions, plan_from
+from ftplan_ros.core.planner import check_plannable
 from ftplan_ros.core.scene import (
     DEFAULT_GOAL_TOLERANCE,
     DEFAULT_ORIENTATION_TOLERANCE,
     parse_tolerated,
 )
 
+from .inputs import read_arm_state
 from .motion import time_path
-from .obstacles import ObstacleSet, shape_from_obstacle
+from .obstacles import ObstacleSet, obstacle_set_key, shape_from_obstacle
 from .params import (
     add_validators,
     array_parameter,
@@ -91,7 +105,7 @@ from .params import (
     positive,
 )
 from .plan_info import join_names, plan_info_values
-from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
+from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
 from .scene_source import SceneSource
 from .spinning import run_node
@@ -103,6 +117,7 @@ from .tasks import (
     task_point,
 )
 from .topics import (
+    APPROACH,
     FAILURE_SURFACE,
     JOINT_STATES,
     OBSTACLES,
@@ -119,10 +134,17 @@ _PLANAR_Z_TOLERANCE = 1e-9  # [m] a planar arm's task lies in z = 0
 RESULTS_DELAY = 0.002
 MARKERS_DELAY = 0.05
 MARKER_WEB_SIZE = 40  # paths and waypoints of S_F drawn at most (~6000 marker points)
+# [m] GetPlan.tolerance is a float32: below its smallest normal number a tolerance has
+# lost its digits on the way (and one below 1.4e-45 arrives as 0, the scene's).
+SMALLEST_TOLERANCE = float(np.finfo(np.float32).tiny)
 
 
 class RequestError(ValueError):
     """A request field the planner cannot use; the message names it."""
+
+
+class PlanTimeout(Exception):  # noqa: N818 - a stop signal, not an error of the caller
+    """Raised from the core's progress hook once a request has used up `plan_timeout`."""
 
 
 class PlannerNode(Node):
@@ -168,8 +190,19 @@ class PlannerNode(Node):
         declare_array(self, 'tolerate', Parameter.Type.STRING_ARRAY,
                       'Joints whose lock the plan must survive (empty: the scene\'s '
                       '`tolerate`, else every joint).')
+        declare(self, 'plan_timeout', 30.0,
+                'Longest a request may plan [s]; past it the search stops at its next stage '
+                'and the request is refused with the reason (requests wait in a queue, one '
+                'planned at a time).')
+        declare(self, 'approach', True,
+                'Plan for the arm where it stands: prefer a theta_s reachable from the '
+                'latest joint state along M_s^F, else by a joint move, and publish the '
+                'approach on /ftplan/plan/approach.')
+        declare(self, 'approach_time', 1.0,
+                'Budget [s] of each of the three RRT-Connect attempts of an approach.')
         validators = {'max_joint_speed': positive, 'margin': non_negative,
-                      'seed': non_negative,
+                      'seed': non_negative, 'plan_timeout': positive,
+                      'approach_time': positive,
                       'joint_space_frame': lambda v: None if v else 'must not be empty',
                       'task_kind': self._check_task_kind,
                       'orientation_tolerance': non_negative,
@@ -189,11 +222,13 @@ class PlannerNode(Node):
             JointTrajectory, TRAJECTORY, LATCHED_QOS)
         self.surface_publisher = self.create_publisher(
             Float64MultiArray, FAILURE_SURFACE, LATCHED_QOS)
+        self.approach_publisher = self.create_publisher(JointTrajectory, APPROACH, LATCHED_QOS)
         self.markers_publisher = self.create_publisher(MarkerArray, PLAN_MARKERS, LATCHED_QOS)
         # Planning is slow: its own group keeps the subscriptions flowing meanwhile.
         self.plan_group = MutuallyExclusiveCallbackGroup()
         self.plan_service = self.create_service(
-            GetPlan, PLAN_SERVICE, self.plan_callback, callback_group=self.plan_group)
+            GetPlan, PLAN_SERVICE, self.plan_callback, qos_profile=SERVICE_QOS,
+            callback_group=self.plan_group)
         # One-shot timers: the results go out right after the response, the markers (the
         # biggest message) a moment later; building them before would delay the answer.
         results_group = MutuallyExclusiveCallbackGroup()
@@ -225,9 +260,25 @@ class PlannerNode(Node):
         return None
 
     def _check_scene_parameters(self, scene: Scene) -> None:
-        """Raise InputError when task_kind or tolerate do not fit the scene's robot."""
-        bind_task_kind(scene.robot, self.get_parameter('task_kind').value)
+        """Raise InputError when the parameters do not fit the scene, or nothing can plan.
+
+        task_kind and tolerate must fit the robot; a robot without redundancy for the task
+        kind, a static obstacle over the base or a scene task that cannot be planned would
+        make every request fail, so they stop the start.
+        """
+        robot = bind_task_kind(scene.robot, self.get_parameter('task_kind').value)
         parse_tolerated(array_parameter(self, 'tolerate') or None, scene.robot.joint_names)
+        if robot.n_joints - robot.task_dim < 1:
+            raise InputError('robot', f'{robot.n_joints} joints give no redundancy for a '
+                             f'{robot.task_dim}-D {robot.task_kind} task: every plan request '
+                             'would fail')
+        task = scene.task
+        if task is not None and convert_task_point(task.start, robot.task_kind) is not None \
+                and convert_task_point(task.goal, robot.task_kind) is not None:
+            check_plannable(scene.with_task(Task(
+                tuple(convert_task_point(task.start, robot.task_kind)),
+                tuple(convert_task_point(task.goal, robot.task_kind)), task.goal_tolerance,
+                task.orientation_tolerance)))
 
     def _task_robot(self, scene: Scene) -> Robot:
         """Return the scene's robot bound to the requests' task kind (InputError if it cannot)."""
@@ -281,7 +332,7 @@ class PlannerNode(Node):
         if not set(msg.name) & set(names):
             return
         try:
-            q = read_joint_state(msg, names)
+            q, _ = read_arm_state(msg, scene.robot)
         except ValueError as error:
             with self._lock:
                 was_good = self._joint_state is not None
@@ -332,18 +383,22 @@ class PlannerNode(Node):
         response.plan = Path(header=Header(stamp=stamp,
                                            frame_id=scene.frame_id if scene else ''))
         values: dict[str, object] = {'stamp': stamp_key(stamp)}
+        timeout = float(self.get_parameter('plan_timeout').value)
         try:
-            scene = self._request_scene(request)
+            scene, q = self._request_scene(request)
             task = scene.task
             values.update(plan_info_values(task, [scene.robot.joint_names[i]
                                                   for i in scene.tolerated_joints]),
-                          obstacles=len(scene.obstacles))
-            options = PlannerOptions(verification=VerificationOptions(
-                margin=float(self.get_parameter('margin').value)))
-            rng = np.random.default_rng(int(self.get_parameter('seed').value))
-            result = plan(scene, options, rng, cache=self.cache)
+                          obstacles=len(scene.obstacles),
+                          obstacle_set=obstacle_set_key(scene.obstacles))
+            result, approach = self._plan(scene, q, time.monotonic() + timeout)
         except (InputError, RequestError) as error:
             self._report_failure(f'bad plan request: {error}', values)
+            return response
+        except PlanTimeout:
+            self._report_failure(f'no answer within plan_timeout = {timeout:g} s: the search '
+                                 'was stopped; raise plan_timeout or simplify the request',
+                                 values)
             return response
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             self.get_logger().error(traceback.format_exc())
@@ -355,11 +410,36 @@ class PlannerNode(Node):
             return response
         values['tolerated_joints'] = join_names(result.stats.get('tolerated_joints', []) or [
             scene.robot.joint_names[i] for i in result.tolerated_joints])
-        response.plan = self._publish_plan(scene, result, stamp, values)
+        values['approach'] = 'not planned (no joint state, or the approach parameter is ' \
+            'off)' if approach is None else approach.describe()
+        response.plan = self._publish_plan(scene, result, approach, stamp, values)
         return response
 
-    def _request_scene(self, request: GetPlan.Request) -> Scene:
-        """Build the scene (static + topic obstacles) with the request's task, or raise."""
+    def _plan(self, scene: Scene, q: np.ndarray | None, deadline: float,
+              ) -> tuple[PlanResult, Approach | None]:
+        """Plan the request's scene; with q, for the arm standing there (plan_from).
+
+        Raises PlanTimeout at the first stage of the search that starts past `deadline`
+        (monotonic [s]).
+        """
+        def progress(line: str) -> None:
+            if time.monotonic() > deadline:
+                raise PlanTimeout(line)
+
+        margin = float(self.get_parameter('margin').value)
+        options = PlannerOptions(verification=VerificationOptions(margin=margin))
+        rng = np.random.default_rng(int(self.get_parameter('seed').value))
+        if q is None or not self.get_parameter('approach').value:
+            return plan(scene, options, rng, progress, cache=self.cache), None
+        reachable = plan_from(scene, q, options, rng, progress, self.cache, ApproachOptions(
+            margin=margin, rrt_time=float(self.get_parameter('approach_time').value)))
+        return reachable.result, reachable.approach
+
+    def _request_scene(self, request: GetPlan.Request) -> tuple[Scene, np.ndarray | None]:
+        """Build the scene (static + topic obstacles) with the request's task, or raise.
+
+        Returns it with the latest joint configuration (None when there is none).
+        """
         with self._lock:
             q = self._joint_state
             joint_state_problem = self._joint_state_problem
@@ -382,6 +462,10 @@ class PlannerNode(Node):
         tolerance = float(request.tolerance)
         if not np.isfinite(tolerance) or tolerance < 0.0:
             raise InputError('tolerance', f'must be >= 0 [m] (0: the scene\'s), got {tolerance}')
+        if 0.0 < tolerance < SMALLEST_TOLERANCE:
+            raise InputError('tolerance', f'{tolerance:g} m is below the smallest normal float32 '
+                             f'({SMALLEST_TOLERANCE:g}), the type of GetPlan.tolerance: its '
+                             'digits were lost on the way')
         if tolerance == 0.0:
             tolerance = scene.task.goal_tolerance if scene.task else DEFAULT_GOAL_TOLERANCE
         angle = float(self.get_parameter('orientation_tolerance').value)
@@ -392,7 +476,7 @@ class PlannerNode(Node):
         tolerated = parse_tolerated(None if tolerate is None else list(tolerate),
                                     robot.joint_names)
         task = Task(tuple(x_s.tolist()), tuple(x_g.tolist()), tolerance, angle)
-        return scene.with_task(task).with_tolerated(tolerated)
+        return scene.with_task(task).with_tolerated(tolerated), q
 
     def _scene_goal(self, scene: Scene, kind: str) -> np.ndarray:
         """Return the scene's task goal as a task point of `kind`, or raise InputError."""
@@ -430,12 +514,13 @@ class PlannerNode(Node):
 
     # Results ------------------------------------------------------------------------
 
-    def _publish_plan(self, scene: Scene, result: PlanResult, stamp, values: dict) -> Path:
+    def _publish_plan(self, scene: Scene, result: PlanResult, approach: Approach | None,
+                      stamp, values: dict) -> Path:
         """Return the end-effector Path; the results and report follow the response."""
         positions, orientations = end_effector_poses(scene.robot, result.nominal_path)
         path = create_path(positions, scene.frame_id, stamp, orientations)
         with self._lock:
-            self._pending_results = (scene, result, stamp, values)
+            self._pending_results = (scene, result, approach, stamp, values)
         self.results_timer.reset()
         return path
 
@@ -446,12 +531,16 @@ class PlannerNode(Node):
             pending, self._pending_results = self._pending_results, None
         if pending is None:
             return
-        scene, result, stamp, values = pending
+        scene, result, approach, stamp, values = pending
         try:
             names = list(scene.robot.joint_names)
             nominal = result.nominal_path
             speed = float(self.get_parameter('max_joint_speed').value)
             self.surface_publisher.publish(create_failure_surface(result.surface.paths))
+            moves = approach.path if approach is not None and approach.ok else \
+                np.zeros((0, len(names)))
+            self.approach_publisher.publish(create_joint_trajectory(
+                names, moves, time_path(moves, speed) if len(moves) else [], stamp))
             self.trajectory_publisher.publish(create_joint_trajectory(
                 names, nominal, time_path(nominal, speed), stamp))
             self.start_publisher.publish(create_joint_state(names, result.theta_s, stamp=stamp))
@@ -468,7 +557,8 @@ class PlannerNode(Node):
                       min_clearance_m=result.stats.get('min_clearance_m', float('nan')))
         self.diagnostics.report(
             'plan', 'OK', f'plan found in {values["plan_time_s"]:.3f} s: theta_s = '
-            f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints', values, log=True)
+            f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
+            f'{values["approach"]}', values, log=True)
         with self._lock:
             self._pending_markers = (scene, result, stamp)
         self.markers_timer.reset()

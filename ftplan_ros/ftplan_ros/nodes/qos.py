@@ -16,3 +16,13 @@ LATCHED_QOS = QoSProfile(
 
 # Events and commands: reliable, volatile, a short queue.
 EVENT_QOS_DEPTH = 10
+
+# Service requests: a node serves one at a time (a plan takes a while) and the others wait
+# in this queue; rclpy's default queue of 10 dropped the rest without a word (issue 10).
+SERVICE_QUEUE_DEPTH = 1000
+SERVICE_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=SERVICE_QUEUE_DEPTH,
+    durability=DurabilityPolicy.VOLATILE,
+    reliability=ReliabilityPolicy.RELIABLE,
+)

@@ -3,14 +3,17 @@
     ros2 run ftplan_ros sim --ros-args -p scene_file:=fig3a.yaml -p rate:=100.0
 
 It follows JointTrajectory commands on /ftplan/joint_command like a position-controlled
-arm: from where it is through the points at their times (linear in joint space),
+arm (a command with an angle beyond a joint's limits, or absurdly far round, is refused:
+inputs.py): from where it is through the points at their times (linear in joint space),
 slowed down segment by segment when a command asks for more than `max_joint_speed`;
 an empty trajectory stops it. A stamped command starts at its stamp.
 
 A failure event on /ftplan/locked_joint locks that joint where it is (or at the angle
-given) for good, and the simulated controller brakes the other joints too (the paper
-assumes the failure is detected and the arm stops), until a new command arrives; so the
-arm stays exactly on the commanded path. Later commands move only the free joints.
+given, which must lie within `lock_angle_tolerance` of where it is: a joint cannot jump,
+so an event farther off is refused and reported) for good, and the simulated controller
+brakes the other joints too (the paper assumes the failure is detected and the arm
+stops), until a new command arrives; so the arm stays exactly on the commanded path.
+Later commands move only the free joints.
 
 The sim keeps its own clock: each tick advances it by 1/`rate`, so an overloaded machine
 slows the arm down instead of making it jump past events. It publishes /joint_states
@@ -52,12 +55,14 @@ from ftplan_msgs_py import (
     time_to_seconds,
 )
 from ftplan_ros.core import CollisionChecker, InputError, Robot, Scene, Task, task_errors
-from ftplan_ros.core.angles import wrap_configuration
+from ftplan_ros.core.angles import configuration_difference, wrap_configuration
 from ftplan_ros.core.manifolds import project_many, trace_self_motion_manifolds
 from ftplan_ros.core.paths import densify
 from ftplan_ros.core.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
 from ftplan_ros.core.task_space import POINT_SIZE, unit_vector
 
+from .inputs import angle_problem
+from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem
 from .obstacles import ObstacleSet
 from .params import (
     add_validators,
@@ -68,7 +73,7 @@ from .params import (
     non_negative,
     positive,
 )
-from .qos import EVENT_QOS_DEPTH, LATCHED_QOS
+from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector
 from .scene_source import SceneSource
 from .spinning import run_node
@@ -224,7 +229,7 @@ class SimNode(Node):
         self.obstacle_subscription = self.create_subscription(
             MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
         self.reset_service = self.create_service(Trigger, RESET_SERVICE,
-                                                 self.reset_callback)
+                                                 self.reset_callback, qos_profile=SERVICE_QOS)
         self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
 
     def _declare_parameters(self) -> None:
@@ -242,6 +247,9 @@ class SimNode(Node):
                 'kind); set it like the planner\'s.', read_only=True)
         declare(self, 'brake_on_lock', True,
                 'Stop every joint when one locks, until the next command.')
+        declare(self, 'lock_angle_tolerance', DEFAULT_LOCK_ANGLE_TOLERANCE,
+                'Farthest a lock event\'s angle may be from where the joint is [rad]; events '
+                'beyond it are refused (a joint locks where it stands).')
         declare_array(self, 'initial_configuration', Parameter.Type.DOUBLE_ARRAY,
                       'Configuration [rad] at start and after ~/reset (default: the clearest '
                       'configuration found at the task start).')
@@ -251,6 +259,7 @@ class SimNode(Node):
                       'qw] pose; [m].')
         validators = {
             'rate': positive, 'max_joint_speed': positive, 'collision_check_step': positive,
+            'lock_angle_tolerance': positive,
             'goal_tolerance': non_negative, 'orientation_tolerance': non_negative,
             'task_kind': check_task_kind,
             'initial_configuration': self._check_configuration,
@@ -331,6 +340,9 @@ class SimNode(Node):
                 self.motion = None
                 return
             positions, times = read_joint_trajectory(msg, self.names)
+            problem = angle_problem(self.robot, positions)
+            if problem:
+                raise ValueError(f'JointTrajectory: {problem}')
             start = self._start_time(msg)
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored joint command: {error}')
@@ -382,7 +394,15 @@ class SimNode(Node):
         joint = self.names.index(event.name)
         if joint in self.locked:
             return
-        value = float(self.q[joint]) if event.angle is None else event.angle
+        problem = lock_angle_problem(event.name, event.angle, float(self.q[joint]),
+                                     bool(self.robot.periodic[joint]),
+                                     float(self.get_parameter('lock_angle_tolerance').value))
+        if problem:
+            self.diagnostics.rejected('input', f'ignored locked-joint event: {problem}')
+            return
+        value = float(self.q[joint]) if event.angle is None else \
+            float(self.q[joint]) + float(configuration_difference(
+                event.angle, self.q[joint], self.robot.periodic[joint]))
         if abs(value - self.q[joint]) > _LOCK_SNAP_TOLERANCE:
             self.get_logger().warning(f'{event.name} locks at {value:.6f} rad, '
                                       f'{value - self.q[joint]:+.6f} rad from where it is')

@@ -7,6 +7,7 @@ PLAN_SERVICE = '/ftplan/plan'
 START_CONFIGURATION = '/ftplan/plan/start_configuration'
 TRAJECTORY = '/ftplan/plan/trajectory'
 FAILURE_SURFACE = '/ftplan/plan/failure_surface'
+APPROACH = '/ftplan/plan/approach'  # how the arm gets to θ_s from where it stood (issue 10)
 PLAN_MARKERS = '/ftplan/plan/markers'
 LOCKED_JOINT = '/ftplan/locked_joint'
 EXECUTE_SERVICE = '/ftplan/execute'

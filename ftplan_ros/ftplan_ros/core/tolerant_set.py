@@ -1,0 +1,587 @@
+"""The failure-tolerant set G of a planar 3R arm among disks, on a joint grid, from both sides.
+
+G holds the configurations from which the arm reaches the goal x_g (within the goal
+tolerance) without collision whichever tolerated joint locks there: for every joint i,
+the configuration and a goal configuration lie in one connected piece of the free part
+of its failure plane {θ_i = const}. A failure-tolerant plan exists exactly when a path in
+G joins a start configuration (on M_s, obstacle-free) to a goal configuration.
+
+The joint space is cut into N^3 closed cells. A cell's clearance channels (one per link:
+the capsule's distance to the nearest disk, exact) change inside it by at most the lever
+bound Σ_a R[k, a] · h_a (h the half widths; `link_lever_arms`), so each cell is
+
+* certified free when every channel at its centre exceeds the bound (every configuration
+  in the closed cell is free), and
+* possibly free unless some channel at its centre is below minus the bound (then every
+  configuration in the cell collides).
+
+Cells are classified coarse to fine: a coarse cell that is certain is not split.
+
+For joint i, the cells with the same θ_i-index form a layer (a slab of locked values). In
+a layer, the free part of every failure plane {θ_i = v}, v in the slab, is
+
+* contained in the union of the layer's possibly free cells, so a configuration whose
+  cell's layer component (cells touching at a face, edge or corner) holds no cell that
+  may reach x_g cannot escape (`escape_liberal`: an over-approximation of G_i);
+* contains the union of its certified free cells, each closed cell meeting the plane in a
+  free closed rectangle; cells touching at a corner share a point, so a layer component
+  is connected in every plane of the slab. It reaches a goal configuration in the plane
+  θ_i = v for every v of the slab when the exact inverse kinematics of the 2R arm left by
+  the lock (`locked_goal_configurations`), solved at the middle of each of m sub-slabs,
+  puts a solution in a cell of the component for every sub-slab: moving θ_i by at most
+  half a sub-slab moves the tool by at most R_i · (sub-slab) / 2 <= the goal tolerance
+  (`escape_certified`: an under-approximation of G_i).
+
+Angles [rad], lengths [m]. The grid is the reference that decides whether a plan exists
+(reference.py) and the guide of the grid planner (web_search.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numba
+import numpy as np
+from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .errors import InputError
+from .robot import PlanarChain
+from .scene import Scene
+
+# [m] every clearance bound gives this much away to float rounding
+_ROUNDING = 1e-9
+
+
+def supports(scene: Scene) -> bool:
+    """Whether the grid handles the scene: a planar 3R chain among spheres (disks)."""
+    robot = scene.robot
+    return (isinstance(robot, PlanarChain) and robot.n_joints == 3
+            and all(ob.shape == 'sphere' for ob in scene.obstacles))
+
+
+def link_lever_arms(lengths: np.ndarray) -> np.ndarray:
+    """(n, n) R[k, a] = Σ_{m=a..k} ℓ_m [m]: how far any point of link k is from joint a.
+
+    Turning joint a by δ moves every point of link k by at most R[k, a] |δ|.
+    """
+    n = len(lengths)
+    arms = np.zeros((n, n))
+    for k in range(n):
+        for a in range(k + 1):
+            arms[k, a] = lengths[a:k + 1].sum()
+    return arms
+
+
+@numba.njit(cache=True)
+def link_clearances(lengths, link_radius, centers, radii, thetas):
+    """Clearance (M, n) [m] of each link's capsule from the nearest disk, exactly.
+
+    `centers` (P, 2) and `radii` (P,) are the disks, `thetas` (M, n) the configurations.
+    """
+    count, n = thetas.shape
+    out = np.full((count, n), np.inf)
+    points = np.zeros((n + 1, 2))
+    for q in range(count):
+        _joint_points(lengths, thetas[q], points)
+        for k in range(n):
+            out[q, k] = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
+    return out
+
+
+@numba.njit(cache=True)
+def _joint_points(lengths, theta, points):
+    """Fill `points` (n+1, 2) [m] with the base, the joints and the tool."""
+    phi = 0.0
+    for k in range(lengths.shape[0]):
+        phi += theta[k]
+        points[k + 1, 0] = points[k, 0] + lengths[k] * np.cos(phi)
+        points[k + 1, 1] = points[k, 1] + lengths[k] * np.sin(phi)
+
+
+@numba.njit(cache=True)
+def _segment_clearance(a, b, centers, radii):
+    """Smallest distance [m] from segment a-b to the disks (negative inside one)."""
+    dx = b[0] - a[0]
+    dy = b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    best = np.inf
+    for p in range(centers.shape[0]):
+        ex = centers[p, 0] - a[0]
+        ey = centers[p, 1] - a[1]
+        t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
+        t = min(1.0, max(0.0, t))
+        fx = ex - t * dx
+        fy = ey - t * dy
+        d = np.sqrt(fx * fx + fy * fy) - radii[p]
+        if d < best:
+            best = d
+    return best
+
+
+@numba.njit(cache=True)
+def _classify_level(lengths, link_radius, centers, radii, arms, lower, step, size, index):
+    """Status (c,) of cells `index` (c, n) of `size` fine cells: 0 collides, 1 free, 2 unsure.
+
+    Inside a cell of half widths h, a point of link k moves by at most
+    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), d_ka the farthest end of link k from joint a at the
+    centre: the first term is its lever arm there, the second how much the cell can
+    stretch it.
+    """
+    count, n = index.shape
+    status = np.empty(count, dtype=np.int8)
+    points = np.zeros((n + 1, 2))
+    theta = np.empty(n)
+    half = 0.5 * size * step
+    for c in range(count):
+        for a in range(n):
+            theta[a] = lower[a] + (index[c, a] + 0.5) * size * step[a]
+        _joint_points(lengths, theta, points)
+        free = True
+        collides = False
+        for k in range(n):
+            stretch = 0.0
+            for b in range(n):
+                stretch += arms[k, b] * half[b]
+            bound = 1e-9
+            for a in range(k + 1):
+                d0 = np.hypot(points[k, 0] - points[a, 0], points[k, 1] - points[a, 1])
+                d1 = np.hypot(points[k + 1, 0] - points[a, 0], points[k + 1, 1] - points[a, 1])
+                bound += half[a] * (max(d0, d1) + stretch)
+            clearance = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
+            if clearance <= bound:
+                free = False
+            if clearance < -bound:
+                collides = True
+        status[c] = 0 if collides else 1 if free else 2
+    return status
+
+
+@numba.njit(cache=True)
+def triangle_free(lengths, link_radius, centers, radii, arms, corners, depth):
+    """Whether every configuration of the triangle `corners` (3, n) [rad] is free.
+
+    The clearance at the centroid must beat the lever bound of `_classify_level` over the
+    corners' spread; otherwise the triangle is split in four, `depth` times at most.
+    """
+    n = corners.shape[1]
+    stack = np.empty((4 * depth + 1, 3, n))
+    levels = np.empty(4 * depth + 1, dtype=np.int64)
+    stack[0] = corners
+    levels[0] = 0
+    top = 1
+    points = np.zeros((n + 1, 2))
+    centre = np.empty(n)
+    half = np.empty(n)
+    while top > 0:
+        top -= 1
+        tri = stack[top].copy()
+        level = levels[top]
+        for a in range(n):
+            centre[a] = (tri[0, a] + tri[1, a] + tri[2, a]) / 3.0
+            half[a] = max(abs(tri[0, a] - centre[a]),
+                          max(abs(tri[1, a] - centre[a]), abs(tri[2, a] - centre[a])))
+        _joint_points(lengths, centre, points)
+        free = True
+        for k in range(n):
+            stretch = 0.0
+            for b in range(n):
+                stretch += arms[k, b] * half[b]
+            bound = 1e-9
+            for a in range(k + 1):
+                d0 = np.hypot(points[k, 0] - points[a, 0], points[k, 1] - points[a, 1])
+                d1 = np.hypot(points[k + 1, 0] - points[a, 0], points[k + 1, 1] - points[a, 1])
+                bound += half[a] * (max(d0, d1) + stretch)
+            clearance = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
+            if clearance <= 0.0:
+                return False
+            if clearance <= bound:
+                free = False
+        if free:
+            continue
+        if level >= depth:
+            return False
+        ab = 0.5 * (tri[0] + tri[1])
+        bc = 0.5 * (tri[1] + tri[2])
+        ca = 0.5 * (tri[2] + tri[0])
+        for piece in range(4):
+            if piece == 0:
+                stack[top, 0], stack[top, 1], stack[top, 2] = tri[0], ab, ca
+            elif piece == 1:
+                stack[top, 0], stack[top, 1], stack[top, 2] = ab, tri[1], bc
+            elif piece == 2:
+                stack[top, 0], stack[top, 1], stack[top, 2] = ca, bc, tri[2]
+            else:
+                stack[top, 0], stack[top, 1], stack[top, 2] = ab, bc, ca
+            levels[top] = level + 1
+            top += 1
+    return True
+
+
+@numba.njit(cache=True)
+def _fill_blocks(target, cells, size, value):
+    """Set every fine cell of the coarse cells (c, 3) of `size` fine cells per edge."""
+    for c in range(cells.shape[0]):
+        i0 = cells[c, 0] * size
+        j0 = cells[c, 1] * size
+        k0 = cells[c, 2] * size
+        for i in range(i0, i0 + size):
+            for j in range(j0, j0 + size):
+                for k in range(k0, k0 + size):
+                    target[i, j, k] = value
+
+
+@numba.njit(cache=True)
+def _tool_near(lengths, lower, step, cells, x, reach):
+    """(N, N, N) bool: cells whose centre puts the tool within `reach` [m] of x."""
+    out = np.zeros((cells, cells, cells), dtype=np.bool_)
+    for i in range(cells):
+        a = lower[0] + (i + 0.5) * step[0]
+        for j in range(cells):
+            b = a + lower[1] + (j + 0.5) * step[1]
+            px = lengths[0] * np.cos(a) + lengths[1] * np.cos(b)
+            py = lengths[0] * np.sin(a) + lengths[1] * np.sin(b)
+            for k in range(cells):
+                c = b + lower[2] + (k + 0.5) * step[2]
+                dx = px + lengths[2] * np.cos(c) - x[0]
+                dy = py + lengths[2] * np.sin(c) - x[1]
+                out[i, j, k] = dx * dx + dy * dy <= reach * reach
+    return out
+
+
+@dataclass(frozen=True)
+class JointLattice:
+    """N cells per joint over the joint ranges: `lower` (3,) [rad], `step` (3,) [rad]."""
+
+    cells: int
+    lower: np.ndarray
+    step: np.ndarray
+    periodic: np.ndarray
+
+    @classmethod
+    def over(cls, robot: PlanarChain, cells: int) -> JointLattice:
+        """Cover every joint's range (its limits, or (-π, π]) with `cells` cells."""
+        limits = robot.limits
+        return cls(cells, limits[:, 0].copy(), (limits[:, 1] - limits[:, 0]) / cells,
+                   robot.periodic.copy())
+
+    def centres(self, index: np.ndarray, size: int = 1) -> np.ndarray:
+        """Centres (c, 3) [rad] of cells `index` (c, 3) of `size` fine cells per edge."""
+        return self.lower + (index + 0.5) * size * self.step
+
+    def cell_of(self, thetas: np.ndarray) -> np.ndarray:
+        """Index (c, 3) of a closed cell holding each configuration (c, 3) [rad]."""
+        offset = np.floor((np.asarray(thetas) - self.lower) / self.step).astype(np.int64)
+        wrapped = np.mod(offset, self.cells)
+        return np.where(self.periodic, wrapped, np.clip(offset, 0, self.cells - 1))
+
+    def tool_near(self, robot: PlanarChain, x: np.ndarray, tolerance: float = 0.0,
+                  ) -> np.ndarray:
+        """(N, N, N) bool: cells that may hold a configuration with the tool within tolerance of x.
+
+        The tool moves by at most Σ_a tip_arm[a] · h_a inside a cell (h the half widths).
+        """
+        reach = float(robot.tip_lever_arms() @ (0.5 * self.step)) + tolerance + _ROUNDING
+        return _tool_near(np.asarray(robot.link_lengths, dtype=float), self.lower, self.step,
+                          self.cells, np.asarray(x, dtype=float)[:2], reach)
+
+    def inside(self, thetas: np.ndarray) -> np.ndarray:
+        """(c,) bool: configurations within the limits of the joints that have them."""
+        upper = self.lower + self.cells * self.step
+        within = (thetas >= self.lower) & (thetas <= upper)
+        return np.all(within | self.periodic, axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class CellClasses:
+    """Every cell certified free, possibly free, or neither (then surely colliding)."""
+
+    lattice: JointLattice
+    certified: np.ndarray   # (N, N, N) bool
+    possible: np.ndarray    # (N, N, N) bool
+    evaluations: int        # cell centres whose clearance was computed
+
+
+def classify_cells(scene: Scene, cells: int, coarsest: int = 16,
+                   margin: float = 0.0) -> CellClasses:
+    """Classify the N^3 cells, coarse to fine (`coarsest` cells per joint to begin).
+
+    `cells` must be `coarsest` times a power of two; free means clear by more than
+    `margin` [m] (the disks grow by it).
+    """
+    robot = scene.robot
+    lattice = JointLattice.over(robot, cells)
+    levels = int(round(np.log2(cells / coarsest)))
+    if coarsest * 2 ** levels != cells or levels < 0:
+        raise ValueError(f'cells ({cells}) must be {coarsest} times a power of two')
+    lengths = np.asarray(robot.link_lengths, dtype=float)
+    arms = link_lever_arms(lengths)
+    centers = np.array([ob.center[:2] for ob in scene.obstacles], dtype=float).reshape(-1, 2)
+    radii = np.array([ob.radius for ob in scene.obstacles], dtype=float) + margin
+    certified = np.zeros((cells,) * 3, dtype=bool)
+    possible = np.zeros((cells,) * 3, dtype=bool)
+    index = np.stack(np.meshgrid(*(np.arange(coarsest),) * 3, indexing='ij'), -1).reshape(-1, 3)
+    evaluations = 0
+    corners = np.stack(np.meshgrid(*([0, 1],) * 3, indexing='ij'), -1).reshape(-1, 3)
+    for level in range(levels + 1):
+        size = cells // (coarsest * 2 ** level)
+        status = _classify_level(lengths, float(robot.link_radius), centers, radii, arms,
+                                 lattice.lower, lattice.step, size, index)
+        evaluations += len(index)
+        free, unsure = index[status == 1], index[status == 2]
+        _fill_blocks(certified, free, size, True)
+        _fill_blocks(possible, free, size, True)
+        if level == levels:
+            _fill_blocks(possible, unsure, size, True)
+            break
+        index = (2 * unsure[:, None, :] + corners[None]).reshape(-1, 3)
+    return CellClasses(lattice, certified, possible, evaluations)
+
+
+def label_wrapped(mask: np.ndarray, structure: np.ndarray, periodic: np.ndarray,
+                  ) -> np.ndarray:
+    """Label the components of `mask` under `structure`, joined across periodic axes.
+
+    Like `scipy.ndimage.label` (0 outside the mask, components numbered from 1), with
+    each periodic axis wrapped round: the mask is padded by one wrapped cell along those
+    axes, and a pad cell's label is merged with the label of the cell it copies.
+    """
+    pad = [(1, 1) if p else (0, 0) for p in periodic]
+    padded = np.pad(mask, pad, mode='wrap')
+    labels, count = ndimage.label(padded, structure=structure)
+    inner = labels[tuple(slice(1, -1) if p else slice(None) for p in periodic)]
+    if count == 0:
+        return inner
+    first, second = [], []
+    for axis, p in enumerate(periodic):
+        if not p:
+            continue
+        size = mask.shape[axis]
+        for pad_at, source in ((0, size), (size + 1, 1)):
+            a = np.take(labels, pad_at, axis=axis).ravel()
+            b = np.take(labels, source, axis=axis).ravel()
+            keep = (a > 0) & (b > 0)
+            first.append(a[keep])
+            second.append(b[keep])
+    if not first:
+        return inner
+    a, b = np.concatenate(first), np.concatenate(second)
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(count + 1, count + 1))
+    _, merged = connected_components(graph, directed=False)
+    # Renumber the merged components 1.. (0 stays the background's).
+    _, renumbered = np.unique(merged, return_inverse=True)
+    renumbered = (renumbered - renumbered[0]).astype(np.int32)
+    return renumbered[inner]
+
+
+def layer_structure(joint: int) -> np.ndarray:
+    """Return the 3x3x3 structure joining cells of one θ_joint-layer that touch (8 in 2-D)."""
+    structure = np.zeros((3, 3, 3), dtype=bool)
+    index = [slice(None)] * 3
+    index[joint] = 1
+    structure[tuple(index)] = True
+    return structure
+
+
+def two_link_solutions(a: float, b: float, target: np.ndarray) -> np.ndarray:
+    """Solutions (s, 2) [rad] (first link's angle, elbow) of a 2R arm of links a, b [m].
+
+    `target` (2,) [m]; none when it is out of reach or a link has no length.
+    """
+    if a <= 0.0 or b <= 0.0:
+        return np.empty((0, 2))
+    r2 = float(target @ target)
+    cos_elbow = (r2 - a * a - b * b) / (2.0 * a * b)
+    if abs(cos_elbow) > 1.0:
+        return np.empty((0, 2))
+    out = []
+    for elbow in {float(np.arccos(cos_elbow)), -float(np.arccos(cos_elbow))}:
+        first = np.arctan2(target[1], target[0]) - np.arctan2(b * np.sin(elbow),
+                                                              a + b * np.cos(elbow))
+        out.append((first, elbow))
+    return np.array(out)
+
+
+def locked_goal_configurations(lengths: np.ndarray, x: np.ndarray, joint: int,
+                               value: float) -> np.ndarray:
+    """Every configuration (s, 3) [rad] with θ_joint = value and the tool exactly at x.
+
+    The arm left by the lock is a 2R arm (two links made rigid by the locked joint count
+    as one); its closed-form solutions are all there are, except in the degenerate case
+    of a target at its base with equal links, where one of the circle of solutions is
+    returned.
+    """
+    l1, l2, l3 = (float(v) for v in lengths)
+    x = np.asarray(x, dtype=float)
+    out = []
+    if joint == 0:
+        elbow = l1 * np.array([np.cos(value), np.sin(value)])
+        for first, second in two_link_solutions(l2, l3, x - elbow):
+            out.append((value, first - value, second))
+    elif joint == 1:
+        rigid = l1 + l2 * np.exp(1j * value)
+        length, offset = abs(rigid), float(np.angle(rigid))
+        for first, second in two_link_solutions(length, l3, x):
+            out.append((first - offset, value, second + offset - value))
+    else:
+        rigid = l2 + l3 * np.exp(1j * value)
+        length, offset = abs(rigid), float(np.angle(rigid))
+        for first, second in two_link_solutions(l1, length, x):
+            out.append((first, second - offset, value))
+    return np.array(out, dtype=float).reshape(-1, 3)
+
+
+def preimage_samples(lengths: np.ndarray, x: np.ndarray, count: int) -> np.ndarray:
+    """Exact points (s, 3) [rad] of the pre-image of x: `count` angles of the last link."""
+    l1, l2, l3 = (float(v) for v in lengths)
+    out = []
+    for phi in np.linspace(-np.pi, np.pi, count, endpoint=False):
+        wrist = np.asarray(x, dtype=float) - l3 * np.array([np.cos(phi), np.sin(phi)])
+        for first, second in two_link_solutions(l1, l2, wrist):
+            out.append((first, second, phi - first - second))
+    return np.array(out, dtype=float).reshape(-1, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class TolerantSet:
+    """G on a joint grid (see the module docstring) for a scene's task.
+
+    `certified[i]` (N, N, N) marks cells every configuration of which can escape with
+    joint i locked (under-approximation); `liberal[i]` the cells that may hold such a
+    configuration (over-approximation). `layer_labels[i]` numbers the components of the
+    certified free cells of each θ_i-layer; `goal_points[i]` (g, 3) are the exact goal
+    configurations found in certified-escaping components, solved at the middle of
+    sub-slab `goal_slabs[i]` (g,) (layer · m + k, m = `sub_slabs[i]`).
+    """
+
+    scene: Scene
+    classes: CellClasses
+    joints: tuple[int, ...]
+    certified: dict
+    liberal: dict
+    layer_labels: dict
+    goal_points: dict
+    goal_slabs: dict
+    sub_slabs: dict
+
+    @property
+    def lattice(self) -> JointLattice:
+        """The grid."""
+        return self.classes.lattice
+
+    @cached_property
+    def certified_all(self) -> np.ndarray:
+        """(N, N, N) bool: cells inside G for every tolerated joint (under-approximation)."""
+        out = self.classes.certified.copy()
+        for joint in self.joints:
+            out &= self.certified[joint]
+        return out
+
+    @cached_property
+    def liberal_all(self) -> np.ndarray:
+        """(N, N, N) bool: cells that may meet G (over-approximation)."""
+        out = self.classes.possible.copy()
+        for joint in self.joints:
+            out &= self.liberal[joint]
+        return out
+
+
+def sub_slab_count(robot: PlanarChain, step: float, joint: int, tolerance: float) -> int:
+    """Sub-slabs m of a layer such that half a sub-slab of θ_joint moves the tool <= tolerance."""
+    reach = float(robot.tip_lever_arms()[joint])
+    return max(1, int(np.ceil(reach * step / (2.0 * 0.9 * tolerance))))
+
+
+def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0.0,
+                 ) -> TolerantSet:
+    """Compute G from inside and outside on N = `cells` cells per joint for scene.task.
+
+    Free means clear of the disks by more than `margin` [m].
+    """
+    if not supports(scene):
+        raise InputError('robot', 'the joint grid handles planar 3R arms among disks only')
+    classes = classify_cells(scene, cells, coarsest, margin)
+    robot, task = scene.robot, scene.task
+    lattice = classes.lattice
+    lengths = np.asarray(robot.link_lengths, dtype=float)
+    x_goal = np.asarray(task.goal, dtype=float)
+    possibly_goal = lattice.tool_near(robot, x_goal, task.goal_tolerance)
+    certified, liberal, labels_of, goals_of, slabs_of, subs = {}, {}, {}, {}, {}, {}
+    for joint in scene.tolerated_joints:
+        structure = layer_structure(joint)
+        others = lattice.periodic.copy()
+        others[joint] = False
+        # Outside: components of possibly free cells holding a possible goal cell.
+        labels = label_wrapped(classes.possible, structure, others)
+        escape = np.zeros(labels.max() + 1, dtype=bool)
+        escape[np.unique(labels[possibly_goal & classes.possible])] = True
+        escape[0] = False
+        liberal[joint] = escape[labels]
+        # Inside: components of certified free cells covering every sub-slab with a goal.
+        labels = label_wrapped(classes.certified, structure, others)
+        m = sub_slab_count(robot, lattice.step[joint], joint, task.goal_tolerance)
+        if m > 62:
+            raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
+        levels = lattice.lower[joint] + (np.arange(cells)[:, None]
+                                         + (np.arange(m)[None, :] + 0.5) / m) * lattice.step[joint]
+        points, slab = locked_goal_configurations_at(lengths, x_goal, joint, levels.ravel())
+        keep = lattice.inside(points)
+        points, slab = points[keep], slab[keep]
+        index = lattice.cell_of(points)
+        label = labels[index[:, 0], index[:, 1], index[:, 2]]
+        coverage = np.zeros(labels.max() + 1, dtype=np.int64)
+        np.bitwise_or.at(coverage, label, np.left_shift(1, slab % m).astype(np.int64))
+        full = coverage == (1 << m) - 1
+        full[0] = False
+        certified[joint] = full[labels]
+        labels_of[joint] = labels
+        goals_of[joint] = points[full[label]]
+        slabs_of[joint] = slab[full[label]]
+        subs[joint] = m
+    return TolerantSet(scene, classes, tuple(scene.tolerated_joints), certified, liberal,
+                       labels_of, goals_of, slabs_of, subs)
+
+
+def locked_goal_configurations_at(lengths: np.ndarray, x: np.ndarray, joint: int,
+                                  values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`locked_goal_configurations` at many locked values (v,) [rad], vectorised.
+
+    Returns the configurations (s, 3) [rad] and the index into `values` of each.
+    """
+    l1, l2, l3 = (float(v) for v in lengths)
+    values = np.asarray(values, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if joint == 0:
+        a, b = np.full_like(values, l2), np.full_like(values, l3)
+        target = x[None, :] - l1 * np.stack([np.cos(values), np.sin(values)], axis=1)
+        offset = np.zeros_like(values)
+    elif joint == 1:
+        rigid = l1 + l2 * np.exp(1j * values)
+        a, b, offset = np.abs(rigid), np.full_like(values, l3), np.angle(rigid)
+        target = np.broadcast_to(x, (len(values), 2))
+    else:
+        rigid = l2 + l3 * np.exp(1j * values)
+        a, b, offset = np.full_like(values, l1), np.abs(rigid), np.angle(rigid)
+        target = np.broadcast_to(x, (len(values), 2))
+    usable = (a > 0.0) & (b > 0.0)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        cos_elbow = (np.sum(target ** 2, axis=1) - a * a - b * b) / (2.0 * a * b)
+    usable &= np.abs(cos_elbow) <= 1.0
+    out, which = [], []
+    for sign in (1.0, -1.0):
+        keep = usable if sign > 0 else usable & (np.abs(cos_elbow) < 1.0)
+        elbow = sign * np.arccos(np.clip(cos_elbow[keep], -1.0, 1.0))
+        first = np.arctan2(target[keep, 1], target[keep, 0]) - np.arctan2(
+            b[keep] * np.sin(elbow), a[keep] + b[keep] * np.cos(elbow))
+        v = values[keep]
+        if joint == 0:
+            theta = np.stack([v, first - v, elbow], axis=1)
+        elif joint == 1:
+            theta = np.stack([first - offset[keep], v, elbow + offset[keep] - v], axis=1)
+        else:
+            theta = np.stack([first, elbow - offset[keep], v], axis=1)
+        out.append(theta)
+        which.append(np.flatnonzero(keep))
+    return np.vstack(out), np.concatenate(which)

@@ -1,0 +1,873 @@
+"""Past the paper's surface: a web of recovery sheets over the failure-tolerant set G.
+
+The paper's failure surface fans out from θ_s to one arc of M_g^F through monotonic
+paths; crowded scenes often leave no such fan although a plan exists. This planner
+(method 'recovery_sheets') looks for the plan in G itself and builds a web whose slices
+are the recoveries (planar 3R arms among disks; `tolerant_set.py`):
+
+1. G is computed on a joint grid of N^3 cells from inside: cells every configuration of
+   which is free and can escape to the goal with any tolerated joint locked.
+2. The nominal path runs from an exact start configuration (M_s) through certified cells
+   (breadth-first, 26 neighbours, round the torus) to an exact goal configuration: θ_s,
+   each cell's centre and the middle of each step. Every piece between two waypoints
+   then lies in one closed cell, so in one θ_i-layer for every joint i.
+3. For each tolerated joint i and each waypoint j, a recovery column at the constant
+   level v_j = γ_i(j): it starts at γ(j) exactly, follows the nominal path's projection
+   onto the plane θ_i = v_j (`P_j, P_{j+1}, ...`), then a route through the certified
+   cells of the layer (breadth-first in 2-D, shortened by straight cuts) to a goal
+   configuration of the layer's component at that level (a grid sample within the goal
+   tolerance, `tolerant_set.py`). Consecutive columns share the rest of their route, so
+   the strip between them is a thin prism over the same cells: a *sheet*. A sheet ends
+   where the shared route stops being free at the next level; the next sheet starts
+   with a fresh route from the same waypoint.
+4. The web is the nominal path (a sheet of its own) followed by the sheets, each closed
+   by repeating its last column (`FailureSurface.cuts`); the sheets meet the nominal
+   path where they share its points (their bottom rows are nominal waypoints).
+
+Why a recovery exists (the structure part 3 of the self-check proves on the finished
+web by its explicit slice check, `slices.py`): a lock of joint i at a point p of the
+nominal segment (j, j+1) has p_i between v_j and v_{j+1}; the segment is the bottom rung
+of a strip whose two columns stay at v_j and v_{j+1}, so every rung and diagonal of the
+strip crosses p_i and the slice climbs the strip to its top chord, which lies within the
+goal tolerance; a lock at a waypoint follows its column. Each sheet's goal row, every
+triangle's clearance and the slices themselves are then checked like any web
+(verification.py); the grid is only the guide.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import replace
+
+import numba
+import numpy as np
+
+from .angles import wrap_angle
+from .collision import CollisionChecker
+from .failure_surface import FailureSurface
+from .manifolds import project_to_preimage
+from .options import PlannerOptions
+from .reference import FULL, proves_no
+from .result import PlanResult
+from .scene import Scene
+from .tolerant_set import (
+    TolerantSet,
+    label_wrapped,
+    link_lever_arms,
+    preimage_samples,
+    supports,
+    tolerant_set,
+    triangle_free,
+)
+from .verification import verify_surface
+
+log = logging.getLogger(__name__)
+
+METHOD = 'recovery_sheets'
+PAPER_METHOD = 'paper_surface'
+_MOST_ROUNDS = 12  # rounds of waypoints added to the nominal path (where strips need them)
+_SHORTEST_SEGMENT = 1e-4  # [rad] a nominal segment is not split below this
+_LAYERS_PER_STRIP = 4  # the nominal path gets a waypoint every this many θ_i-layers
+PROVED_NONE = 'no failure-tolerant plan exists (proved on a joint grid)'
+
+
+def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
+                   report: Callable[[str], None], start_configuration: np.ndarray | None = None,
+                   prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None,
+                   ) -> PlanResult:
+    """Name the paper's result's method; where it found no plan, run the recovery sheets.
+
+    The sheets run for planar 3R arms among disks when `options.methods` lists them. A
+    failure says whether the grid proved that no plan exists or found none at its
+    resolution, after the paper's own reason.
+    """
+    result = replace(result, stats={'method': PAPER_METHOD} | result.stats)
+    if result.feasible or METHOD not in options.methods or not supports(scene):
+        return result
+    if result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0:
+        # No start passes the necessary condition (eq. 6) for every joint, with starts a
+        # quarter step apart along M_s: no plan has room to start (not a proof).
+        return result
+    sheets = WebSearch(scene, options, report, start_configuration,
+                       prefer_starts).run(previous=result)
+    stats = result.stats | {f'sheets_{key}': value for key, value in sheets.stats.items()
+                            if key not in ('method', 'tolerated_joints')}
+    if sheets.feasible:
+        return replace(sheets, stats=sheets.stats | {'paper_reason': result.reason,
+                                                     'paper_plan_stats': result.stats})
+    stats['proved_infeasible'] = bool(sheets.stats.get('proved_infeasible', False))
+    return replace(result, stats=stats, reason=f'{sheets.reason}; the paper\'s surface: '
+                   f'{result.reason}')
+
+
+class WebSearch:
+    """Plan a planar 3R scene by recovery sheets over G (see the module docstring).
+
+    `prefer_starts` maps start configurations (c, 3) to a mask (c,) of those to try
+    first (as `planner.plan` takes it).
+    """
+
+    def __init__(self, scene: Scene, options: PlannerOptions, report: Callable[[str], None],
+                 start_configuration: np.ndarray | None = None,
+                 prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None):
+        self.scene = scene
+        self.options = options
+        self.report = report
+        if start_configuration is not None:  # onto M_s, as the paper's search takes it
+            start_configuration = project_to_preimage(
+                scene.robot, np.asarray(scene.task.start, dtype=float),
+                np.asarray(start_configuration, dtype=float))
+        self.start_configuration = start_configuration
+        self.prefer_starts = prefer_starts
+        self.margin = options.verification.margin
+        self.checker = CollisionChecker(scene.robot, scene.obstacles)
+
+    def run(self, previous: PlanResult | None = None) -> PlanResult:
+        """Try each grid in turn; the result keeps `previous`'s manifolds for the figures."""
+        stats: dict = {'method': METHOD}
+        reason = 'no grid tried'
+        for cells in self.options.sheet_cells:
+            self.report(f'recovery sheets on a {cells}^3 joint grid')
+            grid = tolerant_set(self.scene, cells, margin=self.margin)
+            surface, reason = self._plan_on(grid)
+            stats['grid_cells'] = cells
+            if surface is not None:
+                verdict = verify_surface(surface, self.checker, self.scene.task,
+                                         self.options.verification)
+                if verdict.ok:
+                    stats.update(min_clearance_m=verdict.min_clearance,
+                                 recovery_min_clearance_m=verdict.recovery_min_clearance,
+                                 goal_error_bound_m=verdict.max_goal_error,
+                                 clearance_samples=verdict.clearance_samples,
+                                 criterion='a shortest path through the failure-tolerant set',
+                                 web_shape=list(surface.paths.shape))
+                    return self._result(True, '', surface, stats, previous)
+                reason = f'the recovery sheets failed the self-check: {verdict.reason}'
+                log.debug(reason)
+                continue
+            if proves_no(grid):
+                stats['proved_infeasible'] = True
+                return self._result(False, f'{PROVED_NONE}, {cells}^3 cells', None, stats,
+                                    previous)
+        return self._result(False, 'no failure-tolerant plan found within the resolution of '
+                            f'the joint grid ({reason})', None, stats, previous)
+
+    def _result(self, feasible: bool, reason: str, surface: FailureSurface | None,
+                stats: dict, previous: PlanResult | None) -> PlanResult:
+        robot = self.scene.robot
+        stats['collision_checks'] = self.checker.checks
+        stats['tolerated_joints'] = [robot.joint_names[i] for i in self.scene.tolerated_joints]
+        manifolds = (previous.start_manifolds, previous.goal_manifolds) if previous else ((), ())
+        return PlanResult(feasible, robot.joint_names, reason, surface, stats, *manifolds,
+                          periodic=robot.periodic)
+
+    def _plan_on(self, grid: TolerantSet) -> tuple[FailureSurface | None, str]:
+        """Build the web on one grid, or say why not."""
+        found = _nominal_cells(grid, self.start_configuration, self.prefer_starts)
+        if found is None:
+            return None, 'no path through the certified failure-tolerant cells'
+        gamma = _split_at_layers(_nominal_path(grid, *found), grid, _LAYERS_PER_STRIP)
+        for _ in range(_MOST_ROUNDS):
+            sheets, splits = [], {}
+            for joint in grid.joints:
+                builder = _SheetBuilder(grid, gamma, joint, self.margin)
+                blocks = builder.build()
+                if blocks is None and not builder.splits:
+                    return None, f'no recovery sheet for joint {joint + 1}'
+                splits.update(builder.splits)
+                sheets.append(blocks)
+            if splits:
+                gamma = _split_segments(gamma, splits)
+                continue
+            rows = max(len(column) for blocks in sheets for block in blocks for column in block)
+            if rows <= len(gamma):
+                return _assemble(gamma, sheets, grid.joints), ''
+            gamma = _lengthen_end(gamma, rows - len(gamma))
+        return None, 'the recovery sheets need too many waypoints'
+
+
+# Step 2: the nominal path ---------------------------------------------------------------
+
+def _nominal_cells(grid: TolerantSet, start_configuration: np.ndarray | None,
+                   prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """θ_s, the cells (c, 3) from its cell to a goal cell, and the goal configuration.
+
+    Starts that `prefer_starts` marks are tried first.
+    """
+    inside = grid.certified_all
+    if not inside.any():
+        return None
+    lattice = grid.lattice
+    robot, task = grid.scene.robot, grid.scene.task
+    lengths = np.asarray(robot.link_lengths, dtype=float)
+    if start_configuration is not None:
+        starts = np.asarray(start_configuration, dtype=float).reshape(1, -1)
+    else:
+        starts = preimage_samples(lengths, np.asarray(task.start, dtype=float),
+                                  8 * lattice.cells)
+    goals = np.vstack([grid.goal_points[j] for j in grid.joints]
+                      + [preimage_samples(lengths, np.asarray(task.goal, dtype=float),
+                                          8 * lattice.cells)])
+    starts = starts[lattice.inside(starts)]
+    goals = goals[lattice.inside(goals)]
+    start_cells, goal_cells = lattice.cell_of(starts), lattice.cell_of(goals)
+    start_ok = inside[tuple(start_cells.T)]
+    goal_ok = inside[tuple(goal_cells.T)]
+    if not start_ok.any() or not goal_ok.any():
+        return None
+    labels = label_wrapped(inside, FULL, lattice.periodic)
+    shared = np.intersect1d(labels[tuple(start_cells[start_ok].T)],
+                            labels[tuple(goal_cells[goal_ok].T)])
+    if not shared.size:
+        return None
+    target = np.zeros(inside.shape, dtype=np.bool_)
+    target[tuple(goal_cells[goal_ok].T)] = True
+    preferred = np.asarray(prefer_starts(starts), dtype=bool) & start_ok \
+        if prefer_starts is not None else np.zeros(len(starts), dtype=bool)
+    path = None
+    for usable in (preferred, start_ok):
+        if usable.any():
+            path = _bfs(inside, lattice.periodic, start_cells[usable], target)
+            if path is not None:
+                start_ok = usable
+                break
+    if path is None:
+        return None
+    first = np.flatnonzero(np.all(start_cells == path[0], axis=1) & start_ok)[0]
+    last = np.flatnonzero(np.all(goal_cells == path[-1], axis=1) & goal_ok)[0]
+    return starts[first], path, goals[last]
+
+
+def _nominal_path(grid: TolerantSet, theta_s: np.ndarray, cells: np.ndarray,
+                  theta_g: np.ndarray) -> np.ndarray:
+    """Waypoints (W+1, 3) [rad], lifted, from θ_s through the cells to the goal.
+
+    The cell centres are joined by straight cuts wherever the cut passes certified cells
+    only (so every point of the path lies in G).
+    """
+    lattice = grid.lattice
+    periodic = lattice.periodic
+    points = [np.asarray(theta_s, dtype=float)]
+    for centre in list(lattice.centres(cells)) + [np.asarray(theta_g, dtype=float)]:
+        points.append(points[-1] + _step(centre - points[-1], periodic))
+    points = np.array(points)
+    offsets = (points - lattice.lower) / lattice.step
+    inside = grid.certified_all
+    kept, k = [0], 0
+    while k < len(points) - 1:
+        far = k + 1
+        for candidate in range(k + 2, len(points)):
+            if not _walk_free3(inside, offsets[k], offsets[candidate], periodic):
+                break
+            far = candidate
+        kept.append(far)
+        k = far
+    gamma = points[kept]
+    keep = np.concatenate([[True], np.any(np.diff(gamma, axis=0) != 0.0, axis=1)])
+    return gamma[keep]
+
+
+def _split_at_layers(gamma: np.ndarray, grid: TolerantSet, every: int = 1) -> np.ndarray:
+    """Add a waypoint wherever the path crosses every `every`-th θ_i-layer boundary.
+
+    (For every tolerated joint i.) With `every` = 1 each segment lies in one closed layer
+    of each joint, and its recovery strip needs the cells certified in that layer only;
+    coarser, fewer strips span a few layers, whose certified cells they need at once.
+    """
+    lattice = grid.lattice
+    points = [gamma[0]]
+    for a, b in zip(gamma[:-1], gamma[1:], strict=True):
+        crossings = []
+        for i in grid.joints:
+            if a[i] == b[i]:
+                continue
+            low, high = sorted((a[i], b[i]))
+            width = every * lattice.step[i]
+            first = np.floor((low - lattice.lower[i]) / width) + 1
+            lines = lattice.lower[i] + width * np.arange(
+                first, np.ceil((high - lattice.lower[i]) / width))
+            for line in lines[(lines > low) & (lines < high)]:
+                crossings.append(((line - a[i]) / (b[i] - a[i]), i, line))
+        last_t = 0.0
+        for t, i, line in sorted(crossings):
+            if t - last_t < 1e-9 and len(points) > 1 and last_t > 0.0:
+                points[-1][i] = line  # boundaries of two joints crossed at one point
+                continue
+            if t > 1.0 - 1e-9:
+                continue
+            point = a + t * (b - a)
+            point[i] = line
+            points.append(point)
+            last_t = t
+        points.append(b)
+    return np.array(points)
+
+
+def _split_segments(gamma: np.ndarray, splits: dict) -> np.ndarray:
+    """Add a waypoint at fraction `splits[j]` of each segment j (the same motion)."""
+    points = [gamma[0]]
+    for j in range(len(gamma) - 1):
+        if j in splits:
+            points.append(gamma[j] + splits[j] * (gamma[j + 1] - gamma[j]))
+        points.append(gamma[j + 1])
+    return np.array(points)
+
+
+def _lengthen_end(gamma: np.ndarray, extra: int) -> np.ndarray:
+    """Split the last segment into `extra` + 1 pieces (more rows; the same motion)."""
+    a, b = gamma[-2], gamma[-1]
+    t = np.arange(1, extra + 1)[:, None] / (extra + 1)
+    return np.vstack([gamma[:-1], a + t * (b - a), b[None]])
+
+
+def _step(difference: np.ndarray, periodic: np.ndarray) -> np.ndarray:
+    """Return the step the shortest way round for periodic joints."""
+    return np.where(periodic, wrap_angle(difference), difference)
+
+
+# Step 3: recovery sheets ----------------------------------------------------------------
+
+class _SheetBuilder:
+    """Recovery columns of one joint, as sheets (lists of columns (L, 3) [rad]).
+
+    Where a strip cannot be built, `splits` maps its segment to the fraction at which a
+    waypoint would help (at a sub-slab or layer boundary, else halfway).
+    """
+
+    def __init__(self, grid: TolerantSet, gamma: np.ndarray, joint: int, margin: float = 0.0):
+        self.grid = grid
+        self.lattice = grid.lattice
+        self.gamma = gamma
+        self.joint = joint
+        self.others = [a for a in range(3) if a != joint]
+        self.periodic2 = self.lattice.periodic[self.others]
+        self.step2 = self.lattice.step[self.others]
+        self.lower2 = self.lattice.lower[self.others]
+        self.size = self.lattice.cells
+        self.layers = np.moveaxis(grid.classes.certified, joint, 0)  # layer first
+        goals = grid.goal_points[joint]
+        self.goal_points = goals
+        self.goal_slabs = grid.goal_slabs[joint]
+        self.goal_cells = self.lattice.cell_of(goals)[:, self.others]
+        self.m = grid.sub_slabs[joint]
+        self.free = _TriangleCheck(grid.scene, margin)
+        self.splits: dict[int, float] = {}
+        self.masks: dict[tuple[int, int], np.ndarray] = {}
+
+    def build(self) -> list[list[np.ndarray]] | None:
+        """Sheets from the last waypoint back to θ_s, returned in order.
+
+        None when a strip cannot be built (`splits` then says where waypoints would help,
+        or is empty when nothing would).
+        """
+        W = len(self.gamma) - 1
+        blocks = []
+        block = None
+        for j in range(W - 1, -1, -1):
+            grown = self._extend(block, j) if block is not None else None
+            if grown is not None:
+                block = grown
+                continue
+            if block is not None:
+                blocks.append(block)
+            block = self._fresh(j)
+            if block is None and j not in self.splits:
+                return None
+        if self.splits:
+            return None
+        blocks.append(block)
+        return [self._columns(b) for b in reversed(blocks)]
+
+    # A block: its first and last waypoints j0, j1, the route (2-D points, lifted) shared
+    # by its columns from its hub on, the cells the route passes, and per column the goal
+    # (3,) its last segment reaches from the route's end.
+
+    def _levels(self, j: int) -> tuple[float, float]:
+        return self.gamma[j, self.joint], self.gamma[j + 1, self.joint]
+
+    def _strip_mask(self, j: int) -> np.ndarray:
+        """(N, N) the cells certified free in every θ_i-layer the strip (j, j+1) spans."""
+        lattice = self.lattice
+        low, high = sorted(self._levels(j))
+        # Closed layers: a strip from a layer boundary on does not span the layer below.
+        nudge = 1e-9 * (high - low)
+        first = int(np.floor((low + nudge - lattice.lower[self.joint]) / lattice.step[self.joint]))
+        last = int(np.floor((high - nudge - lattice.lower[self.joint]) / lattice.step[self.joint]))
+        key = (first, last)
+        if key not in self.masks:
+            layers = np.arange(first, last + 1)
+            layers = np.mod(layers, self.size) if lattice.periodic[self.joint] else \
+                np.clip(layers, 0, self.size - 1)
+            self.masks[key] = np.logical_and.reduce(self.layers[layers], axis=0)
+        return self.masks[key]
+
+    def _cell2(self, point2: np.ndarray) -> np.ndarray:
+        offset = np.floor((point2 - self.lower2) / self.step2).astype(np.int64)
+        return _wrap_cells(offset, self.periodic2, self.size)
+
+    def _fan_free(self, mask: np.ndarray, j: int, hub: np.ndarray) -> bool:
+        """Whether the triangle (P_j, P_{j+1}, hub) lies in the mask's cells."""
+        a, b = self.gamma[j, self.others], self.gamma[j + 1, self.others]
+        offsets = [(p - self.lower2) / self.step2 for p in (a, b, hub)]
+        return _triangle_free(mask, offsets[0], offsets[1], offsets[2], self.periodic2)
+
+    def _fresh(self, j: int) -> dict | None:
+        """Start a new sheet of the strip (j, j+1): a hub, a route from it to goals, two goals."""
+        mask = self._strip_mask(j)
+        levels = self._levels(j)
+        ends = (self.gamma[j, self.others], self.gamma[j + 1, self.others])
+        hub = None
+        for point in (0.5 * (ends[0] + ends[1]), ends[1], ends[0]):
+            cell = self._cell2(point)
+            centre = point + _step(self.lower2 + (cell + 0.5) * self.step2 - point,
+                                   self.periodic2)
+            if mask[tuple(cell)] and self._fan_free(mask, j, centre):
+                hub = (cell, centre)
+                break
+        later = self._goal_candidates(levels[1], levels[0])
+        earlier = self._goal_candidates(levels[0], levels[1])
+        if hub is None or not len(later) or not len(earlier):
+            return self._split(j, layers=True)
+        target = np.zeros(mask.shape, dtype=np.bool_)
+        cells = self.goal_cells[later]
+        target[tuple(cells[mask[tuple(cells.T)]].T)] = True
+        path = _bfs(mask, self.periodic2, hub[0][None, :], target)
+        if path is None:
+            return self._split(j, layers=True)
+        route, covered = self._lift_route(path, hub[1], mask)
+        end = route[-1]
+        best = None
+        for b in later:
+            if not np.array_equal(self.goal_cells[b], path[-1]):
+                continue
+            goal_b = self._goal(b, levels[1], end)
+            for a in earlier:
+                goal_a = goal_b.copy() if a == b else self._goal(a, levels[0], end)
+                goal_a[self.joint] = levels[0]
+                distance = np.max(np.abs(goal_a - goal_b))
+                if (best is None or distance < best[0]) and distance <= _GOAL_STEP and \
+                        self._ends_free(mask, end, goal_a, goal_b):
+                    best = (distance, goal_a, goal_b)
+        if best is None:
+            return self._split(j, layers=False)
+        return {'j0': j, 'j1': j + 1, 'route': route, 'route_cells': covered,
+                'goals': [best[1], best[2]]}
+
+    def _split(self, j: int, layers: bool) -> None:
+        """Ask for a waypoint inside segment j: at a layer (or sub-slab) boundary, or halfway."""
+        at = self._split_fraction(j, layers)
+        a, b = self.gamma[j], self.gamma[j + 1]
+        if at is None and np.max(np.abs(b - a)) > _SHORTEST_SEGMENT:
+            at = 0.5
+        if at is not None:
+            self.splits[j] = at
+        return None
+
+    def _extend(self, block: dict, j: int) -> dict | None:
+        """Return the block with waypoint j's column in front, if its fan and route are free there.
+
+        Over the strip (j, j+1) the new column's first piece and the next column's sweep
+        the triangle (P_j, P_{j+1}, hub), which must lie in the cells certified in every
+        layer the strip spans, like the shared route.
+        """
+        mask = self._strip_mask(j)
+        if not self._fan_free(mask, j, block['route'][0]):
+            return None
+        route_cells = _wrap_cells(block['route_cells'], self.periodic2, self.size)
+        if not mask[tuple(route_cells.T)].all():
+            return None
+        v = self.gamma[j, self.joint]
+        end, following = block['route'][-1], block['goals'][0]
+        best = None
+        for a in self._goal_candidates(v, self.gamma[j + 1, self.joint]):
+            goal = self._goal(a, v, end)
+            distance = np.max(np.abs(goal - following))
+            if (best is None or distance < best[0]) and distance <= _GOAL_STEP and \
+                    self._ends_free(mask, end, goal, following):
+                best = (distance, goal)
+        if best is None:
+            return None
+        grown = dict(block)
+        grown.update(j0=j, goals=[best[1]] + block['goals'])
+        return grown
+
+    def _ends_free(self, mask: np.ndarray, end: np.ndarray, goal_a: np.ndarray,
+                   goal_b: np.ndarray) -> bool:
+        """Whether the two top triangles between the route's end and two goals are free."""
+        end_a, end_b = goal_a.copy(), goal_b.copy()
+        end_a[self.others] = end
+        end_b[self.others] = end
+        return all(self.free(np.array(corners)) for corners in
+                   ((end_a, end_b, goal_b), (end_a, goal_b, goal_a)))
+
+    def _split_fraction(self, j: int, layers: bool) -> float | None:
+        """Return a layer (or sub-slab) boundary strictly inside segment j, nearest its middle."""
+        a, b = self._levels(j)
+        if a == b:
+            return None
+        lower = self.lattice.lower[self.joint]
+        width = self.lattice.step[self.joint] / (1 if layers else self.m)
+        low, high = sorted((a, b))
+        boundaries = lower + width * np.arange(np.floor((low - lower) / width),
+                                               np.ceil((high - lower) / width) + 1)
+        margin = 1e-3 * (high - low)
+        inside = boundaries[(boundaries > low + margin) & (boundaries < high - margin)]
+        if not len(inside):
+            return None if layers else self._split_fraction(j, True)
+        middle = inside[np.argmin(np.abs(inside - 0.5 * (low + high)))]
+        return float((middle - a) / (b - a))
+
+    def _goal_candidates(self, level: float, toward: float) -> np.ndarray:
+        """Goal samples usable at `level` (on its side toward `toward`).
+
+        A sample is usable when `level` lies in its sub-slab: moved there along θ_i, it
+        stays within the goal tolerance.
+        """
+        lattice = self.lattice
+        nudged = level + 1e-9 * np.sign(toward - level) * lattice.step[self.joint]
+        offset = (nudged - lattice.lower[self.joint]) / lattice.step[self.joint]
+        layer = int(np.floor(offset))
+        k = int(np.clip(np.floor((offset - layer) * self.m), 0, self.m - 1))
+        layer = layer % self.size if lattice.periodic[self.joint] else \
+            int(np.clip(layer, 0, self.size - 1))
+        return np.flatnonzero(self.goal_slabs == layer * self.m + k)
+
+    def _goal(self, index: int, level: float, near2: np.ndarray) -> np.ndarray:
+        """Goal sample `index` at the locked value `level`, lifted next to `near2` (2,)."""
+        theta = self.goal_points[index].copy()
+        theta[self.others] = near2 + _step(theta[self.others] - near2, self.periodic2)
+        theta[self.joint] = level
+        return theta
+
+    def _lift_route(self, path: np.ndarray, anchor: np.ndarray, mask: np.ndarray,
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """Centres (r, 2) of the 2-D cells `path`, lifted from `anchor`, with straight cuts.
+
+        Also returns the cells (c, 2) the cut route passes through.
+        """
+        centres = self.lower2 + (path + 0.5) * self.step2
+        lifted = [anchor + _step(centres[0] - anchor, self.periodic2)]
+        for centre in centres[1:]:
+            lifted.append(lifted[-1] + _step(centre - lifted[-1], self.periodic2))
+        return _shortcut(np.array(lifted), mask, self.lower2, self.step2, self.periodic2)
+
+    def _columns(self, block: dict) -> list[np.ndarray]:
+        """Return the columns (L, 3) of a block: γ(j), the hub and route at level v_j, the goal."""
+        columns = []
+        for j in range(block['j0'], block['j1'] + 1):
+            level = self.gamma[j, self.joint]
+            tail = np.zeros((len(block['route']), 3))
+            tail[:, self.others] = block['route']
+            tail[:, self.joint] = level
+            columns.append(np.vstack([self.gamma[j][None, :], tail,
+                                      block['goals'][j - block['j0']][None, :]]))
+        return columns
+
+
+# [rad] largest step between the goals of neighbouring columns (the goal row's chords)
+_GOAL_STEP = 0.15
+
+
+class _TriangleCheck:
+    """Whether a joint-space triangle (3, 3) [rad] is free: exact clearances, lever bounds."""
+
+    def __init__(self, scene: Scene, margin: float = 0.0):
+        robot = scene.robot
+        self.lengths = np.asarray(robot.link_lengths, dtype=float)
+        self.radius = float(robot.link_radius)
+        self.centers = np.array([ob.center[:2] for ob in scene.obstacles],
+                                dtype=float).reshape(-1, 2)
+        self.radii = np.array([ob.radius for ob in scene.obstacles], dtype=float) + margin
+        self.arms = link_lever_arms(self.lengths)
+
+    def __call__(self, corners: np.ndarray) -> bool:
+        return bool(triangle_free(self.lengths, self.radius, self.centers, self.radii,
+                                  self.arms, np.ascontiguousarray(corners, dtype=float), 6))
+
+
+def _assemble(gamma: np.ndarray, sheets: list[list[list[np.ndarray]]],
+              joints: tuple[int, ...]) -> FailureSurface:
+    """Lay the nominal sheet and every joint's sheets side by side, padded at the top."""
+    rows = len(gamma)
+    paths = [gamma, gamma]
+    hit_paths = []
+    for blocks in sheets:
+        for number, block in enumerate(blocks):
+            padded = [np.vstack([column, np.repeat(column[-1:], rows - len(column), 0)])
+                      for column in block]
+            if np.array_equal(padded[0], paths[-1]):
+                # It begins with the column the last sheet ended with: one sheet goes on.
+                paths.pop()
+                padded = padded[1:]
+            if number == 0:  # the column of the lock at θ_s: its top is the H_i hit
+                hit_paths.append(len(paths) - (len(padded) < len(block)))
+            paths += padded + [padded[-1]]  # a repeated path closes the sheet
+    return FailureSurface(np.array(paths[:-1]), 0, tuple(hit_paths), tuple(joints))
+
+
+# Grid helpers ---------------------------------------------------------------------------
+
+def _wrap_cells(cells: np.ndarray, periodic: np.ndarray, size: int) -> np.ndarray:
+    return np.where(periodic, np.mod(cells, size), np.clip(cells, 0, size - 1))
+
+
+def _common_neighbours(a: np.ndarray, b: np.ndarray, mask: np.ndarray, periodic: np.ndarray,
+                       ) -> list[np.ndarray]:
+    """Cells of `mask` within one step (8 neighbours or itself) of both cells a and b."""
+    size = mask.shape[0]
+    out = []
+    for da in (-1, 0, 1):
+        for db in (-1, 0, 1):
+            y = _wrap_cells(a + np.array([da, db]), periodic, size)
+            if _near(y, b, periodic, size) and mask[tuple(y)]:
+                out.append(y)
+    return out
+
+
+def _near(a: np.ndarray, b: np.ndarray, periodic: np.ndarray, size: int) -> bool:
+    """Whether 2-D cells a and b are equal or neighbours (round the torus)."""
+    gap = np.abs(np.asarray(a) - np.asarray(b))
+    gap = np.where(periodic, np.minimum(gap, size - gap), gap)
+    return bool(gap.max() <= 1)
+
+
+def _box(a: np.ndarray, b: np.ndarray, periodic: np.ndarray, size: int) -> np.ndarray:
+    """Return the (up to 2 x 2) cells between neighbouring cells a and b (round the torus)."""
+    step = np.asarray(b) - np.asarray(a)
+    step = np.where(periodic & (np.abs(step) > 1), -np.sign(step), step)
+    return np.array([a, a + [step[0], 0], a + [0, step[1]], a + step], dtype=np.int64)
+
+
+def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.ndarray,
+              periodic: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Drop route points (r, 2) while the straight cut between the kept ones stays in mask.
+
+    Returns the kept points and the cells (c, 2) their segments pass through.
+    """
+    offsets = (points - lower) / step
+    kept = [0]
+    k = 0
+    while k < len(points) - 1:
+        far = k + 1
+        for candidate in range(k + 2, len(points)):
+            if not _segment_free(mask, offsets[k], offsets[candidate], periodic):
+                break
+            far = candidate
+        kept.append(far)
+        k = far
+    covered = [_segment_walk(offsets[a], offsets[b]) for a, b in zip(kept[:-1], kept[1:],
+                                                                      strict=True)]
+    covered.append(_segment_walk(offsets[-1], offsets[-1]))
+    return points[kept], _wrap_cells(np.vstack(covered), periodic, mask.shape[0])
+
+
+@numba.njit(cache=True)
+def _triangle_free(mask, a, b, c, periodic):
+    """Whether every cell the triangle a, b, c (in cell units) meets is in mask.
+
+    Its edges are walked exactly (`_segment_free`) and its inside on lines a quarter
+    cell apart, each walked exactly too.
+    """
+    if not (_segment_free(mask, a, b, periodic) and _segment_free(mask, b, c, periodic)
+            and _segment_free(mask, c, a, periodic)):
+        return False
+    steps = int(np.ceil(max(max(abs(b[0] - a[0]), abs(b[1] - a[1])),
+                            max(abs(c[0] - a[0]), abs(c[1] - a[1]))) * 4.0))
+    for s in range(1, steps):
+        u = s / steps
+        if not _segment_free(mask, a + u * (b - a), a + u * (c - a), periodic):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _segment_walk(a, b):
+    """Cells (c, 2), unwrapped, that the segment a-b (in cell units) passes through.
+
+    Exactly those between consecutive crossings of grid lines: a segment through a grid
+    corner does not enter the two cells beside it.
+    """
+    count = int(abs(np.floor(b[0]) - np.floor(a[0])) + abs(np.floor(b[1]) - np.floor(a[1]))) + 2
+    ts = np.empty(count)
+    ts[0] = 0.0
+    ts[1] = 1.0
+    n = 2
+    for axis in range(2):
+        low = min(a[axis], b[axis])
+        high = max(a[axis], b[axis])
+        line = np.floor(low) + 1.0
+        while line < high:
+            ts[n] = (line - a[axis]) / (b[axis] - a[axis])
+            n += 1
+            line += 1.0
+    ts = np.sort(ts[:n])
+    cells = np.empty((n, 2), dtype=np.int64)
+    found = 0
+    # Pieces shorter than a billionth of a cell are rounding at a grid line: not entered.
+    sliver = 1e-9 / max(1e-300, max(abs(b[0] - a[0]), abs(b[1] - a[1])))
+    for k in range(n - 1):
+        if ts[k + 1] - ts[k] <= sliver and not (k == 0 and n == 2):
+            continue
+        t = 0.5 * (ts[k] + ts[k + 1])
+        cells[found, 0] = int(np.floor(a[0] + t * (b[0] - a[0])))
+        cells[found, 1] = int(np.floor(a[1] + t * (b[1] - a[1])))
+        found += 1
+    return cells[:found]
+
+
+@numba.njit(cache=True)
+def _walk_free3(mask, a, b, periodic):
+    """Whether every 3-D cell the segment a-b (in cell units) passes through is in mask.
+
+    As `_segment_walk`: the cells between consecutive crossings of grid planes.
+    """
+    size = mask.shape[0]
+    count = 2
+    for axis in range(3):
+        count += int(abs(np.floor(b[axis]) - np.floor(a[axis])))
+    ts = np.empty(count)
+    ts[0] = 0.0
+    ts[1] = 1.0
+    n = 2
+    for axis in range(3):
+        low = min(a[axis], b[axis])
+        high = max(a[axis], b[axis])
+        line = np.floor(low) + 1.0
+        while line < high:
+            ts[n] = (line - a[axis]) / (b[axis] - a[axis])
+            n += 1
+            line += 1.0
+    ts = np.sort(ts[:n])
+    index = np.empty(3, dtype=np.int64)
+    sliver = 1e-9 / max(1e-300, max(abs(b[0] - a[0]), max(abs(b[1] - a[1]), abs(b[2] - a[2]))))
+    for k in range(n - 1):
+        if ts[k + 1] - ts[k] <= sliver and not (k == 0 and n == 2):
+            continue
+        t = 0.5 * (ts[k] + ts[k + 1])
+        for axis in range(3):
+            value = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
+            if periodic[axis]:
+                value %= size
+            elif value < 0 or value >= size:
+                return False
+            index[axis] = value
+        if not mask[index[0], index[1], index[2]]:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _segment_free(mask, a, b, periodic):
+    """Whether every cell the segment a-b (in cell units) passes through is in mask."""
+    size = mask.shape[0]
+    cells = _segment_walk(a, b)
+    for k in range(cells.shape[0]):
+        i, j = cells[k, 0], cells[k, 1]
+        if periodic[0]:
+            i %= size
+        elif i < 0 or i >= size:
+            return False
+        if periodic[1]:
+            j %= size
+        elif j < 0 or j >= size:
+            return False
+        if not mask[i, j]:
+            return False
+    return True
+
+
+def _bfs(mask: np.ndarray, periodic: np.ndarray, sources: np.ndarray, target: np.ndarray,
+         ) -> np.ndarray | None:
+    """Cells (c, d) of a shortest path in mask (d = 2 or 3) from a source to a target cell."""
+    dims = mask.ndim
+    offsets = np.array([o for o in np.ndindex(*(3,) * dims) if any(v != 1 for v in o)],
+                       dtype=np.int64) - 1
+    flat_sources = np.ravel_multi_index(tuple(np.asarray(sources).T), mask.shape)
+    found = _bfs_kernel(np.ascontiguousarray(mask).ravel(), np.array(mask.shape),
+                        periodic.astype(np.bool_), offsets, flat_sources.astype(np.int64),
+                        np.ascontiguousarray(target).ravel())
+    if len(found) == 0:
+        return None
+    return np.stack(np.unravel_index(found, mask.shape), axis=1)
+
+
+@numba.njit(cache=True)
+def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
+    """Breadth-first search over flat cells; returns the flat path or an empty array."""
+    total = mask.shape[0]
+    dims = shape.shape[0]
+    parent = np.full(total, -2, dtype=np.int64)
+    queue = np.empty(total, dtype=np.int64)
+    head = 0
+    tail = 0
+    for s in sources:
+        if mask[s] and parent[s] == -2:
+            parent[s] = -1
+            queue[tail] = s
+            tail += 1
+    index = np.empty(dims, dtype=np.int64)
+    end = -1
+    while head < tail:
+        cell = queue[head]
+        head += 1
+        if target[cell]:
+            end = cell
+            break
+        rest = cell
+        for d in range(dims - 1, -1, -1):
+            index[d] = rest % shape[d]
+            rest //= shape[d]
+        for o in range(offsets.shape[0]):
+            flat = 0
+            inside = True
+            for d in range(dims):
+                value = index[d] + offsets[o, d]
+                if value < 0 or value >= shape[d]:
+                    if periodic[d]:
+                        value %= shape[d]
+                    else:
+                        inside = False
+                        break
+                flat = flat * shape[d] + value
+            if inside and mask[flat] and parent[flat] == -2:
+                parent[flat] = cell
+                queue[tail] = flat
+                tail += 1
+    if end < 0:
+        return np.empty(0, dtype=np.int64)
+    length = 0
+    cell = end
+    while cell >= 0:
+        length += 1
+        cell = parent[cell]
+    path = np.empty(length, dtype=np.int64)
+    cell = end
+    for k in range(length - 1, -1, -1):
+        path[k] = cell
+        cell = parent[cell]
+    return path
+
+
+def load_sheet_kernels() -> None:
+    """Run the compiled kernels of the recovery sheets once (numba loads them on first use)."""
+    from .scene import parse_scene
+    from .slices import slice_problem
+    scene = parse_scene({'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]},
+                         'obstacles': [{'type': 'sphere', 'center': [2.5, 0.0], 'radius': 0.2}],
+                         'task': {'start': [2.0, 0.5], 'goal': [1.0, 0.5]}})
+    grid = tolerant_set(scene, 32)
+    mask = grid.classes.certified
+    _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
+    _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
+    _segment_free(mask[0], np.zeros(2), np.ones(2), grid.lattice.periodic[1:])
+    _segment_walk(np.zeros(2), np.ones(2))
+    _walk_free3(mask, np.zeros(3), np.ones(3), grid.lattice.periodic)
+    _triangle_free(mask[0], np.zeros(2), np.ones(2), np.array([0.0, 1.0]),
+                   grid.lattice.periodic[1:])
+    _TriangleCheck(scene)(np.eye(3))
+    paths = np.zeros((2, 2, 3))
+    paths[:, 1, 0] = 1.0
+    paths[1, :, 1] = 1.0
+    slice_problem(FailureSurface(paths, 0, (), ()), (0,))
