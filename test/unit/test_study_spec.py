@@ -126,6 +126,31 @@ def test_the_digest_follows_the_scene_content_not_its_path(tmp_path):
     assert changed.digest() != study_of(MAP).digest()
 
 
+def test_the_spatial_sweep_plans_3d_tasks_of_the_4_dof_arm_with_spheres_in_reach():
+    study = load_study(STUDIES / 'arm4_sweep.yaml')
+    assert study.kind == 'sweep' and study.dim == 3 and study.scene.robot.n_joints == 4
+    tasks = [study.task(k) for k in range(14)]
+    assert all(len(t.start) == len(t.goal) == 3 for t in tasks)
+    assert {len(t.added_obstacles) for t in tasks} == set(range(7))
+    rows = run_chunk(study, [0, 1, 2, 3]).table.to_pylist()
+    assert [r['error'] for r in rows] == [None] * 4
+    assert all(r['goal_z'] == tasks[r['task']].goal[2] for r in rows)
+    assert any(r['feasible'] for r in rows)   # the base scene's task region has plans
+
+
+def test_a_spatial_digest_follows_the_robot_geometry(tmp_path):
+    robots = REPO / 'config' / 'robots'
+    arm = (robots / 'arm4.yaml').read_text()
+    scene = (SCENES / 'arm4_spheres.yaml').read_text()
+    spec = {'scene': 'arm4_spheres.yaml',
+            'vary': {'goal': {'x': [0.3, 0.4, 2], 'y': 0.1, 'z': 0.3}}}
+    (tmp_path / 'arm4_spheres.yaml').write_text(scene.replace('../robots/arm4.yaml', 'arm4.yaml'))
+    (tmp_path / 'arm4.yaml').write_text(arm)
+    same = parse_study(spec, directory=tmp_path).digest()
+    assert same == parse_study(spec, directory=SCENES).digest()
+    (tmp_path / 'arm4.yaml').write_text(arm.replace('link_radius: 0.04', 'link_radius: 0.05'))
+    assert parse_study(spec, directory=tmp_path).digest() != same
+
 # --- validation ------------------------------------------------------------------------------
 
 BAD_SPECS = [
@@ -144,7 +169,8 @@ BAD_SPECS = [
     (MAP, ('vary', 'start', 'x'), 'wide', 'vary.start.x', 'number'),
     (MAP, ('chunk',), 0, 'chunk', '>= 1'),
     (MAP, ('chunk',), True, 'chunk', 'integer'),
-    (MAP, ('planner',), {'method': 'rrt'}, 'planner.method', 'paper_surface'),
+    (MAP, ('planner',), {'methods': ['rrt']}, 'planner.methods', 'paper_surface'),
+    (MAP, ('planner',), {'methods': ['recovery_sheets']}, 'planner.methods', 'comes first'),
     (MAP, ('planner',), {'margin': -0.1}, 'planner.margin', '>= 0'),
     (MAP, ('planner',), {'seed': -1}, 'planner.seed', '>= 0'),
     (MAP, ('scene',), 'no_such_scene.yaml', 'scene', 'cannot read'),

@@ -7,6 +7,9 @@ from dataclasses import dataclass, field
 from .manifolds import ManifoldOptions
 from .verification import VerificationOptions
 
+# The planner's methods, in the order it tries them (web_search.py).
+METHODS = ('paper_surface', 'recovery_sheets')
+
 
 @dataclass(frozen=True)
 class PlannerOptions:
@@ -24,5 +27,5 @@ class PlannerOptions:
     # The methods tried in turn: the paper's surface always, then where it finds no plan
     # recovery sheets over the failure-tolerant set on a joint grid (planar 3R arms among
     # disks; web_search.py). Leave 'recovery_sheets' out for the paper's method alone.
-    methods: tuple[str, ...] = ('paper_surface', 'recovery_sheets')
+    methods: tuple[str, ...] = METHODS
     sheet_cells: tuple[int, ...] = (64, 128)  # recovery sheets: joint grids tried in turn

@@ -10,6 +10,7 @@ urdf`, parsed by Pinocchio) or DH tables (`type: dh`); a task's form says its ki
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -439,6 +440,38 @@ def scene_to_dict(scene: Scene) -> dict:
     if scene.task is not None:
         out['task'] = {'start': list(scene.task.start), 'goal': list(scene.task.goal),
                        'goal_tolerance': scene.task.goal_tolerance}
+    return out
+
+
+def scene_fingerprint(scene: Scene) -> dict:
+    """Return plain data that identifies the scene: equal data, equal plans.
+
+    A planar scene is `scene_to_dict`; a spatial robot, which comes from a file, is its
+    task kind, joint names, limits [rad] and a SHA-256 of its kinematic parameters,
+    collision shapes and self-collision pairs, beside the obstacles and task as data.
+    """
+    if isinstance(scene.robot, PlanarChain):
+        return scene_to_dict(scene)
+    robot = scene.robot
+    geometry = hashlib.sha256(np.ascontiguousarray(robot.kernel_parameters).tobytes())
+    for link in robot.collision_shapes:
+        shape = link.shape
+        geometry.update(repr((link.link, shape.kind, shape.radius, shape.size,
+                              shape.length)).encode())
+        for array in (link.placement, shape.vertices, shape.faces):
+            geometry.update(np.ascontiguousarray(array).tobytes())
+    geometry.update(repr(robot.self_collision_pairs).encode())
+    limits = [[float(v) if math.isfinite(v) else None for v in row] for row in robot.limits]
+    out: dict[str, Any] = {
+        'robot': {'task_kind': robot.task_kind, 'joint_names': list(robot.joint_names),
+                  'limits': limits, 'geometry_sha256': geometry.hexdigest()},
+        'obstacles': [_obstacle_to_dict(ob) for ob in scene.obstacles],
+        'frame_id': scene.frame_id,
+        'tolerate': None if scene.tolerate is None else list(scene.tolerate)}
+    if scene.task is not None:
+        out['task'] = {'start': list(scene.task.start), 'goal': list(scene.task.goal),
+                       'goal_tolerance': scene.task.goal_tolerance,
+                       'orientation_tolerance': scene.task.orientation_tolerance}
     return out
 
 

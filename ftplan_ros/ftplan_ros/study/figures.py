@@ -70,7 +70,7 @@ def map_figure(study: Study, table: pa.Table) -> Figure:
     _finish_map(clearance_ax, study, title, [])
     done = table.num_rows
     figure.suptitle(f'{study.name}: {grid.endpoint} positions, {done} of {study.tasks} tasks, '
-                    f'method {study.planner.method}', fontsize='large')
+                    f'methods {", ".join(study.planner.methods)}', fontsize='large')
     return figure
 
 
@@ -103,7 +103,7 @@ def sweep_figure(study: Study, table: pa.Table) -> Figure:
     ax.grid(alpha=0.3)
     ax.legend(loc='upper right', fontsize='small')
     ax.set_title(f'{study.name}: {table.num_rows} tasks (count above each point), '
-                 f'method {study.planner.method}')
+                 f'methods {", ".join(study.planner.methods)}')
     return figure
 
 

@@ -34,7 +34,7 @@ def result_schema(dim: int) -> pa.Schema:
     to the base scene; feasible: a failure-tolerant plan exists (the planner's guarantee);
     outcome: one of OUTCOMES; reason: why not, from the planner; theta_s [rad]: the start
     configuration of the plan; plan_time_s [s]; min_clearance [m]: of the verified failure
-    surface (inf without obstacles); method: the planner's method; error: what a task
+    surface (inf without obstacles); method: the method that found the plan; error: what a task
     that raised said (null otherwise). Values that do not apply are null.
     """
     positions = [pa.field(f'{end}_{axis}', pa.float64())

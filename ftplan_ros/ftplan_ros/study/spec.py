@@ -10,7 +10,7 @@ file) and what varies (CONTRACT.md, *Studies*):
       # random: {tasks: 2000, seed: 1, start: {radius: [1.8, 2.6]},
       #          goal: {x: [0.5, 1.5], y: [-1.0, 1.0]},
       #          obstacles: {count: [0, 10], radius: [0.1, 0.3], region: {radius: [0.3, 3.0]}}}
-    planner: {seed: 0, margin: 0.0, method: paper_surface}
+    planner: {seed: 0, margin: 0.0, methods: [paper_surface]}   # default: every method
     chunk: 200                     # tasks per Dask task
 
 Positions have one axis per task dimension of the robot: x, y for planar arms (x, y, z
@@ -44,12 +44,12 @@ from ..core import (
     Task,
     VerificationOptions,
     load_scene,
-    scene_to_dict,
 )
 from ..core.files import load_yaml, read_text
+from ..core.options import METHODS
+from ..core.scene import scene_fingerprint
 from ..core.validation import check_keys, integer, mapping, number
 
-METHODS = ('paper_surface',)   # the planner's algorithm; more come with later planners
 AXES = ('x', 'y', 'z')
 DEFAULT_CHUNK = 200
 MAX_TASKS = 10_000_000         # a typo in a grid should not fill the scheduler's memory
@@ -122,15 +122,16 @@ class RandomTasks:
 
 @dataclass(frozen=True)
 class PlannerSettings:
-    """The planner's seed, margin [m] and method, as every task of the study uses them."""
+    """The planner's seed, margin [m] and methods tried, as every task of the study uses them."""
 
     seed: int = 0
     margin: float = 0.0
-    method: str = METHODS[0]
+    methods: tuple[str, ...] = METHODS
 
     def options(self) -> PlannerOptions:
         """Return the core's options for these settings."""
-        return PlannerOptions(verification=VerificationOptions(margin=self.margin))
+        return PlannerOptions(verification=VerificationOptions(margin=self.margin),
+                              methods=self.methods)
 
 
 @dataclass(frozen=True)
@@ -210,9 +211,9 @@ class Study:
                 'obstacles': None if vary.obstacles is None else {
                     'count': list(vary.obstacles.count), 'radius': list(vary.obstacles.radius),
                     'region': _region_to_dict(vary.obstacles.region)}}}
-        return {'scene': scene_to_dict(self.scene), 'vary': varied,
+        return {'scene': scene_fingerprint(self.scene), 'vary': varied,
                 'planner': {'seed': self.planner.seed, 'margin': self.planner.margin,
-                            'method': self.planner.method},
+                            'methods': list(self.planner.methods)},
                 'chunk': self.chunk}
 
     def digest(self) -> str:
@@ -347,15 +348,20 @@ def _region(data: Any, where: str, dim: int) -> Region:
 
 def _planner(data: Any) -> PlannerSettings:
     data = mapping(data, 'planner')
-    check_keys(data, 'planner', required=(), optional=('seed', 'margin', 'method'))
+    check_keys(data, 'planner', required=(), optional=('seed', 'margin', 'methods'))
     seed = integer(data.get('seed', 0), 'planner.seed', least=0)
     margin = number(data.get('margin', 0.0), 'planner.margin')
     if margin < 0.0:
         raise InputError('planner.margin', f'must be >= 0, got {margin}')
-    method = data.get('method', METHODS[0])
-    if method not in METHODS:
-        raise InputError('planner.method', f'must be one of {", ".join(METHODS)}, got {method!r}')
-    return PlannerSettings(seed, margin, method)
+    methods = data.get('methods', list(METHODS))
+    if not isinstance(methods, list) or not methods or \
+            any(m not in METHODS for m in methods) or len(set(methods)) < len(methods):
+        raise InputError('planner.methods', f'must be a list of distinct methods from '
+                         f'{", ".join(METHODS)}, got {methods!r}')
+    if methods[0] != METHODS[0]:
+        raise InputError('planner.methods', f'{METHODS[0]} comes first (the others run where '
+                         f'it finds no plan), got {methods!r}')
+    return PlannerSettings(seed, margin, tuple(methods))
 
 
 # --- random tasks ----------------------------------------------------------------------------

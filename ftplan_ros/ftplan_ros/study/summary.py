@@ -51,7 +51,7 @@ def summarize(study: Study, table: pa.Table) -> str:
     """Tabulate the study's outcomes, times and clearances (and a sweep's rates)."""
     rows = table.num_rows
     lines = [f'study {study.name}: {study.kind} of {study.tasks} tasks '
-             f'({rows} in the results), method {study.planner.method}']
+             f'({rows} in the results), methods {", ".join(study.planner.methods)}']
     if rows == 0:
         return '\n'.join(lines)
     outcome = np.asarray(table.column('outcome').to_pylist())

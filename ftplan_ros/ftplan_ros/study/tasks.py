@@ -64,8 +64,7 @@ def error_row(study: Study, index: int, error: str) -> dict:
         row = task_inputs(study, study.task(index))
     except Exception:  # the inputs cannot be drawn: the row keeps its index only
         row = {'task': index}
-    return row | {'feasible': False, 'outcome': 'error', 'method': study.planner.method,
-                  'error': error}
+    return row | {'feasible': False, 'outcome': 'error', 'error': error}
 
 
 def task_inputs(study: Study, task: StudyTask) -> dict:
@@ -77,7 +76,6 @@ def task_inputs(study: Study, task: StudyTask) -> dict:
     row['random_obstacles'] = len(task.added_obstacles)
     row['obstacle_centers'] = [list(ob.center[:dim]) for ob in task.added_obstacles]
     row['obstacle_radii'] = [ob.radius for ob in task.added_obstacles]
-    row['method'] = study.planner.method
     return row
 
 
@@ -109,6 +107,7 @@ def _plan(study: Study, task: StudyTask) -> dict:
     return {'feasible': result.feasible, 'outcome': outcome, 'reason': result.reason,
             'theta_s': None if result.theta_s is None else result.theta_s.tolist(),
             'plan_time_s': stats.get('plan_time_s'),
+            'method': stats.get('method') if result.feasible else None,
             'min_clearance': stats.get('min_clearance_m') if result.feasible else None}
 
 

@@ -1,0 +1,150 @@
+"""Recovery sheets (core/web_search.py) on crowded scenes (crowded.py), refereed by brute force.
+
+The guarantee is checked without the certificate: locks of every tolerated joint along
+the nominal path are recovered with `recover` (what the executor runs), and each recovery
+path is sampled every half degree with the robot's own CollisionChecker and must end
+within the goal tolerance.
+"""
+
+from functools import cache
+
+import numpy as np
+import pytest
+from ftplan_testing import SCENES
+
+from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, recover
+from ftplan_ros.core.paths import densify, point_at_fraction
+from ftplan_ros.core.reference import Existence, decide_existence
+from ftplan_ros.core.verification import VerificationOptions, verify_surface
+from ftplan_ros.core.web_search import METHOD, PAPER_METHOD
+from ftplan_ros.crowded import RADII, crowded_scene
+
+HALF_DEGREE = np.radians(0.5)
+# crowded_scene(default_rng(seed), disks=6, attempts=12, cells=64) for these seeds leaves
+# the paper's surface without a plan while the recovery sheets find one (found by trying
+# seeds 0-29; 1, 3, 15, 16, 18, 22, 23 and 25-27 behave alike).
+SHEET_SEEDS = (12, 19, 20)
+CHEAP = {'disks': 6, 'attempts': 12, 'cells': 64}
+
+
+@cache
+def make_crowded(seed):
+    return crowded_scene(np.random.default_rng(seed), **CHEAP)
+
+
+@pytest.fixture(scope='module', params=SHEET_SEEDS)
+def sheets_plan(request):
+    scene = make_crowded(request.param)
+    return request.param, scene, plan(scene)
+
+
+def lock_points(result, joint, rng, moments=50, levels=40):
+    """Lock configurations on the nominal path, where a lock of the joint may happen.
+
+    `moments` spread by length, every waypoint, and `levels` sampled among the web's
+    vertex values of the joint (where the slice's combinatorics change), on every nominal
+    segment that takes them.
+    """
+    path = result.nominal_path
+    points = [point_at_fraction(path, f) for f in np.linspace(0.0, 1.0, moments)]
+    points += list(path)
+    values = np.unique(result.surface.vertices[:, joint])
+    low, high = path[:, joint].min(), path[:, joint].max()
+    values = values[(values >= low) & (values <= high)]
+    for level in rng.choice(values, min(levels, len(values)), replace=False):
+        for a, b in zip(path[:-1], path[1:], strict=True):
+            if a[joint] != b[joint] and min(a[joint], b[joint]) <= level <= max(a[joint],
+                                                                                b[joint]):
+                point = a + (level - a[joint]) / (b[joint] - a[joint]) * (b - a)
+                point[joint] = level
+                points.append(point)
+    return points
+
+
+def assert_every_lock_recovers(scene, result, seed):
+    robot, task = scene.robot, scene.task
+    checker = CollisionChecker(robot, scene.obstacles)
+    goal = np.asarray(task.goal, dtype=float)
+    # The motion itself: from M_s, collision-free, to the goal.
+    assert np.linalg.norm(robot.forward_kinematics(result.theta_s) - task.start) < 1e-9
+    assert np.array_equal(result.nominal_path[0], result.theta_s)
+    assert checker.min_clearance(densify(result.nominal_path, HALF_DEGREE)).min() > 0.0
+    assert np.linalg.norm(robot.forward_kinematics(result.nominal_path[-1]) - goal) \
+        <= task.goal_tolerance
+    rng = np.random.default_rng(seed)
+    checked = 0
+    for joint in scene.tolerated_joints:
+        for theta in lock_points(result, joint, rng):
+            where = (seed, joint, theta.tolist())
+            rescue = recover(result.surface, theta, joint)
+            assert rescue is not None, where
+            assert np.all(rescue.path[:, joint] == theta[joint]), where
+            assert np.allclose(rescue.path[0], theta), where
+            assert checker.min_clearance(densify(rescue.path, HALF_DEGREE)).min() > 0.0, where
+            assert np.linalg.norm(robot.forward_kinematics(rescue.path[-1]) - goal) \
+                <= task.goal_tolerance, where
+            checked += 1
+    assert checked >= 3 * 60
+
+
+def test_the_sheets_plan_where_the_paper_does_not(sheets_plan):
+    seed, scene, result = sheets_plan
+    assert len(scene.obstacles) >= 4
+    assert result.feasible, result.reason
+    assert result.stats['method'] == METHOD
+    assert result.stats['paper_reason']  # why the paper's surface found none
+    surface = result.surface
+    assert surface.cuts.any() and surface.tolerated == (0, 1, 2)
+    paper_only = plan(scene, PlannerOptions(methods=(PAPER_METHOD,)))
+    assert not paper_only.feasible
+    assert paper_only.stats['method'] == PAPER_METHOD
+
+
+def test_every_lock_of_a_sheets_plan_recovers_by_brute_force(sheets_plan):
+    seed, scene, result = sheets_plan
+    assert_every_lock_recovers(scene, result, seed)
+
+
+def test_the_sheets_plan_passes_the_self_check_again_with_more_recoveries(sheets_plan):
+    _, scene, result = sheets_plan
+    verdict = verify_surface(result.surface, CollisionChecker(scene.robot, scene.obstacles),
+                             scene.task, VerificationOptions(recovery_moments=41))
+    assert verdict.ok, verdict.reason
+
+
+def test_a_paper_plan_is_named_for_its_method():
+    result = plan(load_scene(SCENES / 'fig3a.yaml'))
+    assert result.feasible and result.stats['method'] == PAPER_METHOD
+
+
+# crowded.py -----------------------------------------------------------------------------
+
+def test_crowded_scenes_repeat_and_keep_their_disks_clear():
+    few = {'disks': 2, 'attempts': 4, 'cells': 64}
+    again = crowded_scene(np.random.default_rng(20), **few)
+    assert again == crowded_scene(np.random.default_rng(20), **few)
+    assert again.obstacles == make_crowded(20).obstacles[:len(again.obstacles)]
+    first = make_crowded(20)
+    x_s, x_g = np.asarray(first.task.start), np.asarray(first.task.goal)
+    assert 1.8 - 1e-3 <= np.linalg.norm(x_s) <= 2.6 + 1e-3
+    assert 0.9 - 1e-3 <= np.linalg.norm(x_g) <= 1.5 + 1e-3
+    assert 1 <= len(first.obstacles) <= CHEAP['disks']
+    for ob in first.obstacles:
+        centre = np.asarray(ob.center[:2])
+        assert RADII[0] - 1e-3 <= ob.radius <= RADII[1] + 1e-3
+        for point in (np.zeros(2), x_s, x_g):
+            assert np.linalg.norm(centre - point) > ob.radius + 0.05 - 2e-3
+
+
+@pytest.mark.parametrize('seed', [12, 20, 4])
+def test_every_crowded_scene_is_proved_to_have_a_plan(seed):
+    """The module's promise: a crowded scene has a plan (its reference says YES).
+
+    Seed 4 breaks it: its random task (start [2.548, 0.182], goal [-1.298, -0.723]) has
+    no proved plan even without obstacles, so no disk is ever kept and the obstacle-free
+    task comes back unchecked (the reference: UNSURE at 64 and 128 cells; the planner
+    finds no plan: joint 1's failure plane misses M_g^F from every start).
+    """
+    scene = make_crowded(seed)
+    assert decide_existence(scene, CHEAP['cells']).existence is Existence.YES, \
+        f'{len(scene.obstacles)} disks'
