@@ -302,9 +302,14 @@ def _describe(scene, result) -> str:
         lines.append(f'  S_F: {result.surface.paths.shape[0]} paths x '
                      f'{result.surface.paths.shape[1]} waypoints, minimum clearance '
                      f'{stats["min_clearance_m"]:.3f} m ({stats["criterion"]})')
-    lines.append(f'plan time {stats["plan_time_s"]:.3f} s, {stats.get("collision_checks", 0)} '
-                 f'clearance queries, {stats.get("theta_S", 0)} of '
-                 f'{stats.get("start_candidates", 0)} obstacle-free starts pass eq. (6)')
+    line = f'plan time {stats["plan_time_s"]:.3f} s, method {stats.get("method", "?")}, ' \
+        f'{stats.get("collision_checks", 0)} clearance queries'
+    if 'start_candidates' in stats:
+        line += f', {stats.get("theta_S", 0)} of {stats["start_candidates"]} obstacle-free ' \
+            'starts pass eq. (6)'
+    elif 'grid_cells' in stats:
+        line += f', failure-tolerant set on a {stats["grid_cells"]}^3 joint grid'
+    lines.append(line)
     return '\n'.join(lines)
 
 

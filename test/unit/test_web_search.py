@@ -140,10 +140,9 @@ def test_crowded_scenes_repeat_and_keep_their_disks_clear():
 def test_every_crowded_scene_is_proved_to_have_a_plan(seed):
     """The module's promise: a crowded scene has a plan (its reference says YES).
 
-    Seed 4 breaks it: its random task (start [2.548, 0.182], goal [-1.298, -0.723]) has
-    no proved plan even without obstacles, so no disk is ever kept and the obstacle-free
-    task comes back unchecked (the reference: UNSURE at 64 and 128 cells; the planner
-    finds no plan: joint 1's failure plane misses M_g^F from every start).
+    Seed 4 once broke it: its first random task (start [2.548, 0.182], goal [-1.298,
+    -0.723]) has no proved plan even without obstacles, and came back unchecked; such a
+    task is now drawn again.
     """
     scene = make_crowded(seed)
     assert decide_existence(scene, CHEAP['cells']).existence is Existence.YES, \
