@@ -40,10 +40,10 @@ from .angles import configuration_difference
 from .collision import CollisionChecker
 from .manifolds import (
     ManifoldOptions,
-    _trace_branch,
     mark_obstacle_free,
     project_many,
     self_motion_path,
+    trace_branch,
 )
 from .options import PlannerOptions
 from .paths import densify, path_length
@@ -151,7 +151,7 @@ class ApproachPlanner:
         q = np.asarray(q, dtype=float)
         if robot.n_joints - robot.task_dim != 1 or not self.on_manifold(x_s, q):
             return None
-        branch = mark_obstacle_free(_trace_branch(robot, np.asarray(x_s, dtype=float), q,
+        branch = mark_obstacle_free(trace_branch(robot, np.asarray(x_s, dtype=float), q,
                                                   self.options.manifold),
                                     self.checker, self.options.margin)
         here = int(np.argmin(np.linalg.norm(branch.points - q, axis=1)))

@@ -120,7 +120,7 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
             theta = wrap_configuration(solved[k], robot.periodic)
             if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
                 continue
-            branch = _trace_branch(robot, x, theta, options)
+            branch = trace_branch(robot, x, theta, options)
             log.debug('branch %d: %d points, closed=%s', len(branches), len(branch),
                       branch.closed)
             branches.append(branch)
@@ -257,8 +257,9 @@ def null_space_tangent(robot: Robot, theta: np.ndarray) -> np.ndarray:
     return np.linalg.svd(task_residuals(robot, x, theta)[1][0])[2][-1]
 
 
-def _trace_branch(robot: Robot, x: np.ndarray, seed: np.ndarray,
-                  options: ManifoldOptions) -> SelfMotionManifold:
+def trace_branch(robot: Robot, x: np.ndarray, seed: np.ndarray,
+                 options: ManifoldOptions) -> SelfMotionManifold:
+    """Trace the branch of M(x) through `seed` (n,) [rad] both ways, until it closes."""
     forward, closed, period = _continue(robot, x, seed, +1.0, options)
     if closed:
         return SelfMotionManifold(tuple(x), np.array(forward), True, period)
