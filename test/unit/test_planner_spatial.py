@@ -88,9 +88,25 @@ def test_a_pose_plan_tolerating_all_but_the_elbow_is_sound(iiwa_pose):
     """Brute force: at 9 moments, every tolerated joint's lock has a safe way to the goal."""
     scene, result = iiwa_pose
     assert result.feasible, result.reason
-    robot, task = scene.robot, scene.task
+    robot = scene.robot
     assert result.tolerated_joints == (0, 1, 2, 4, 5, 6)
     assert result.stats['tolerated_joints'] == [n for n in robot.joint_names if n != IIWA_ELBOW]
+    assert_sound(scene, result)
+
+
+@pytest.mark.parametrize('joint', ['iiwa_joint_1', 'iiwa_joint_3'])
+def test_a_plan_tolerating_one_joint_is_found_and_sound(joint):
+    """One hit makes no strip of S_F by itself: the web takes its neighbours on M_g^F."""
+    scene = iiwa_scene([joint])
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.stats['tolerated_joints'] == [joint]
+    assert_sound(scene, result)
+
+
+def assert_sound(scene, result):
+    """Brute force: at 9 moments, every tolerated joint's lock has a safe way to the goal."""
+    robot, task = scene.robot, scene.task
     assert task.reached(task_errors(robot, task.start, result.theta_s[None]))[0]
     assert task.reached(task_errors(robot, task.goal, result.nominal_path[-1:]))[0]
     assert within_limits(robot, result.surface.paths)

@@ -206,6 +206,12 @@ def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
     """
     first, last = window
     inside = np.arange(int(np.ceil(first)), int(np.floor(last)) + 1)
+    if len(hits) == 1:
+        # One tolerated joint: its hit alone makes a web without a strip, which no slice
+        # can walk; its neighbours on the arc make one.
+        w = hits[0].position
+        near = {int(np.floor(w)), int(np.ceil(w))} - {w} or {int(w) - 1, int(w) + 1}
+        inside = np.array(sorted(k for k in near if 0 <= k < len(arc_points)), dtype=int)
     columns = [(float(k), arc_points[k], None)
                for k in _thin(arc_points, inside, column_spacing)]
     columns += [(hit.position, hit.theta, hit.joint) for hit in hits]
