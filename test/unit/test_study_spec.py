@@ -3,6 +3,7 @@
 import io
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -17,6 +18,7 @@ from ftplan_ros.core import InputError
 from ftplan_ros.study import ResultStore, load_study, parse_study, wilson_interval
 from ftplan_ros.study.results import rows_to_table
 from ftplan_ros.study.spec import OBSTACLE_GAP
+from ftplan_ros.study.summary import summarize
 from ftplan_ros.study.tasks import run_chunk, task_inputs
 
 STUDIES = REPO / 'config' / 'studies'
@@ -224,6 +226,7 @@ def test_the_cli_rejects_a_bad_spec_in_one_line_before_starting_a_cluster(tmp_pa
     spec.write_text(yaml.safe_dump(spec_with(MAP, ('scene',), str(SCENES / 'fig3a.yaml')) |
                                    {'chunk': -5}))
     for extra, field in (((), 'chunk:'), (('--workers', '0'), '--workers:'),
+                         (('--workers', '100000'), '--workers:'),
                          (('--workers', '2', '--scheduler', 'tcp://127.0.0.1:1'), '--workers:')):
         run = subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', 'study', spec, '--out',
                               tmp_path / 'out', *extra], capture_output=True, text=True,
@@ -346,3 +349,11 @@ def test_a_task_whose_obstacles_do_not_fit_is_an_error_row():
     (row,) = run_chunk(study_of(crowded), [3]).table.to_pylist()
     assert row['task'] == 3 and row['outcome'] == 'error'
     assert row['error'].startswith('InputError: vary.random.obstacles.region: no room')
+
+
+def test_the_summary_of_a_sweep_whose_obstacles_never_fit_counts_every_error():
+    crowded = spec_with(SWEEP, ('vary', 'random', 'obstacles'),
+                        {'count': [1, 1], 'radius': [0.2, 0.3], 'region': {'radius': [0.0, 0.1]}})
+    study = study_of(crowded)
+    text = summarize(study, run_chunk(study, [0, 1, 2]).table)
+    assert re.search(r'^error\s+3\b', text, re.MULTILINE), text

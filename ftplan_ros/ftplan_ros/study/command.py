@@ -36,6 +36,10 @@ def run_study_command(spec: Path, out: Path, scheduler: str | None, workers: int
         raise InputError('--workers', 'sizes the local cluster: leave it out with --scheduler')
     if workers is not None and workers < 1:
         raise InputError('--workers', f'must be at least 1, got {workers}')
+    most = 4 * (os.cpu_count() or 1)
+    if workers is not None and workers > most:
+        raise InputError('--workers', f'{workers} worker processes on {os.cpu_count()} CPUs: '
+                         f'at most {most} here; use --scheduler for a cluster')
     study = load_study(spec)
     store = ResultStore(out, study)
     store.open()

@@ -34,11 +34,14 @@ def wilson_interval(successes, trials, z: float = Z_95) -> tuple[np.ndarray, np.
 
 
 def feasible_rate_by(table: pa.Table, column: str) -> dict[str, np.ndarray]:
-    """Per value of `column`: value, tasks (not errors), feasible, rate, low, high, errors."""
-    values = np.asarray(table.column(column).to_numpy(zero_copy_only=False))
+    """Per value of `column`: value, tasks (not errors), feasible, rate, low, high, errors.
+
+    Rows without a value (error rows whose inputs could not be drawn) count in no group.
+    """
+    values = np.asarray(table.column(column).to_numpy(zero_copy_only=False), dtype=float)
     feasible = _flags(table, 'feasible')
     errors = np.asarray(table.column('outcome').to_pylist()) == 'error'
-    keys = np.unique(values)
+    keys = np.unique(values[np.isfinite(values)])
     tasks = np.array([np.sum((values == v) & ~errors) for v in keys])
     wins = np.array([np.sum((values == v) & ~errors & feasible) for v in keys])
     low, high = wilson_interval(wins, tasks)
