@@ -104,18 +104,25 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
         shapes.append(LinkShape(int(item.parentJoint), _shape(item, where), placement))
     link_names = [base_link] + [_child_link(model, j) for j in range(1, n + 1)]
     return ChainModel(model.name, tuple(model.names[1:n + 1]), tuple(link_names), placements,
-                      _joint_axes(model), tool, tuple(limits), tuple(shapes),
+                      _joint_axes(model, where), tool, tuple(limits), tuple(shapes),
                       tool_frame=tip_link)
 
 
-def _joint_axes(model: pin.Model) -> np.ndarray:
-    """Return unit axes (n, 3) of the joints in their own frames (motion subspaces)."""
+def _joint_axes(model: pin.Model, where: str) -> np.ndarray:
+    """Return unit axes (n, 3) of the joints in their own frames (motion subspaces).
+
+    Raises InputError for a joint whose URDF axis is not a direction (e.g. xyz="0 0 0").
+    """
     data = model.createData()
     pin.computeJointJacobians(model, data, pin.neutral(model))
     axes = []
     for j in range(1, model.njoints):
         local = pin.getJointJacobian(model, data, j, pin.ReferenceFrame.LOCAL)
-        axes.append(local[3:, model.joints[j].idx_v])
+        axis = local[3:, model.joints[j].idx_v]
+        if not abs(np.linalg.norm(axis) - 1.0) <= 1e-9:
+            raise InputError(f'{where}.file', f'joint {model.names[j]!r} has the axis '
+                             f'{axis.tolist()}: a revolute joint\'s axis must be a direction')
+        axes.append(axis)
     return np.array(axes)
 
 
