@@ -6,6 +6,7 @@ path is sampled every half degree with the robot's own CollisionChecker and must
 within the goal tolerance.
 """
 
+from dataclasses import replace
 from functools import cache
 
 import numpy as np
@@ -95,6 +96,7 @@ def test_the_sheets_plan_where_the_paper_does_not(sheets_plan):
     assert result.stats['paper_reason']  # why the paper's surface found none
     surface = result.surface
     assert surface.cuts.any() and surface.tolerated == (0, 1, 2)
+    assert np.all(np.abs(result.theta_s) <= np.pi)  # wrapped, like the paper's plans
     paper_only = plan(scene, PlannerOptions(methods=(PAPER_METHOD,)))
     assert not paper_only.feasible
     assert paper_only.stats['method'] == PAPER_METHOD
@@ -147,3 +149,13 @@ def test_every_crowded_scene_is_proved_to_have_a_plan(seed):
     scene = make_crowded(seed)
     assert decide_existence(scene, CHEAP['cells']).existence is Existence.YES, \
         f'{len(scene.obstacles)} disks'
+
+
+def test_a_sheets_plan_starts_at_a_wrapped_theta_s():
+    """Fig. 3(a) from the base itself: the sheets plan it, with θ_s in (-π, π] (it was 240°)."""
+    fig3a = load_scene(SCENES / 'fig3a.yaml')
+    scene = fig3a.with_task(replace(fig3a.task, start=(0.0, 0.0)))
+    result = plan(scene)
+    assert result.feasible and result.stats['method'] == METHOD, result.reason
+    assert np.all(np.abs(result.theta_s) <= np.pi), np.degrees(result.theta_s)
+    assert np.array_equal(result.nominal_path[0], result.theta_s)

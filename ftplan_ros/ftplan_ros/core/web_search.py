@@ -133,6 +133,7 @@ class WebSearch:
             surface, reason = self._plan_on(grid)
             stats['grid_cells'] = cells
             if surface is not None:
+                surface = _wrapped(surface, self.scene.robot.periodic)
                 verdict = verify_surface(surface, self.checker, self.scene.task,
                                          self.options.verification)
                 if verdict.ok:
@@ -605,6 +606,13 @@ def _assemble(gamma: np.ndarray, sheets: list[list[list[np.ndarray]]],
                 hit_paths.append(len(paths) - (len(padded) < len(block)))
             paths += padded + [padded[-1]]  # a repeated path closes the sheet
     return FailureSurface(np.array(paths[:-1]), 0, tuple(hit_paths), tuple(joints))
+
+
+def _wrapped(surface: FailureSurface, periodic: np.ndarray) -> FailureSurface:
+    """Move the web by whole turns of its periodic joints so that θ_s lies in (-π, π]."""
+    shift = np.where(periodic, wrap_angle(surface.theta_s) - surface.theta_s, 0.0)
+    return FailureSurface(surface.paths + shift, surface.nominal, surface.hit_paths,
+                          surface.tolerated)
 
 
 # Grid helpers ---------------------------------------------------------------------------
