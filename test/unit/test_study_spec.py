@@ -134,6 +134,9 @@ def test_the_spatial_sweep_plans_3d_tasks_of_the_4_dof_arm_with_spheres_in_reach
     tasks = [study.task(k) for k in range(14)]
     assert all(len(t.start) == len(t.goal) == 3 for t in tasks)
     assert {len(t.added_obstacles) for t in tasks} == set(range(7))
+    # The base column stands on the z axis, 0.04 m thick: no random sphere touches it.
+    for task in (study.task(k) for k in range(study.tasks)):
+        assert all(ob.center[0] - ob.radius > 0.04 for ob in task.added_obstacles), task.index
     rows = run_chunk(study, [0, 1, 2, 3]).table.to_pylist()
     assert [r['error'] for r in rows] == [None] * 4
     assert all(r['goal_z'] == tasks[r['task']].goal[2] for r in rows)
