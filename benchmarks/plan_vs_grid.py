@@ -1,8 +1,8 @@
 """Time the planner against the exhaustive grid baseline on the same random scenes.
 
-    .venv/bin/python benchmarks/plan_vs_grid.py [--scenes 30] [--seed 0] [--cells 90] [--json F]
+    .venv/bin/python benchmarks/plan_vs_grid.py [--scenes 30] [--seed 0] [--cells 256] [--json F]
 
-The same as `ftplan bench`; see ftplan_ros/bench.py for what is measured.
+The same as `ftplan bench`; see ftplan_ros/recall_bench.py for what is measured.
 """
 
 import sys
