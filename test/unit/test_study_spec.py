@@ -244,6 +244,18 @@ def test_the_cli_rejects_a_bad_spec_in_one_line_before_starting_a_cluster(tmp_pa
     assert run.returncode == 2 and 'malformed YAML at line' in run.stderr
 
 
+
+@pytest.mark.parametrize('address', ['tls://127.0.0.1:1'])  # a TypeError in Dask
+def test_a_scheduler_that_cannot_be_reached_is_one_line_naming_the_flag(tmp_path, address):
+    spec = tmp_path / 'spec.yaml'
+    spec.write_text(yaml.safe_dump(spec_with(MAP, ('scene',), str(SCENES / 'fig3a.yaml'))))
+    run = subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', 'study', spec, '--out',
+                          tmp_path / 'out', '--scheduler', address], capture_output=True,
+                         text=True, timeout=120)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr
+    assert lines[0].startswith('ftplan: error: --scheduler: cannot connect'), run.stderr
+
 # --- the results folder ---------------------------------------------------------------------------
 
 def rows_of(study, chunk, **columns):

@@ -73,8 +73,9 @@ def open_client(scheduler: str | None, workers: int | None):
     if scheduler is not None:
         try:
             client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
-        except (OSError, TimeoutError, ValueError) as error:
-            raise InputError('--scheduler', f'cannot connect to {scheduler}: {error}') from None
+        except Exception as error:  # noqa: BLE001 - whatever fails here, the address is bad
+            raise InputError('--scheduler', f'cannot connect to {scheduler}: '
+                             f'{type(error).__name__}: {error}') from None
         with client:
             yield client
         return
