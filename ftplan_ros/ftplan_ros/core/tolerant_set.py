@@ -122,6 +122,24 @@ def _segment_clearance(a, b, centers, radii):
 
 
 @numba.njit(cache=True)
+def _link_motion_bound(points, arms, half, k):
+    """How far [m] a point of link k can move in a box of half widths `half` (n,) [rad].
+
+    `points` (n+1, 2) are the joints at the box's centre; the bound is
+    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), plus 1e-9 m of rounding (see `_classify_level`).
+    """
+    stretch = 0.0
+    for b in range(half.shape[0]):
+        stretch += arms[k, b] * half[b]
+    bound = 1e-9
+    for a in range(k + 1):
+        d0 = np.hypot(points[k, 0] - points[a, 0], points[k, 1] - points[a, 1])
+        d1 = np.hypot(points[k + 1, 0] - points[a, 0], points[k + 1, 1] - points[a, 1])
+        bound += half[a] * (max(d0, d1) + stretch)
+    return bound
+
+
+@numba.njit(cache=True)
 def _classify_level(lengths, link_radius, centers, radii, arms, lower, step, size, index):
     """Status (c,) of cells `index` (c, n) of `size` fine cells: 0 collides, 1 free, 2 unsure.
 
@@ -142,14 +160,7 @@ def _classify_level(lengths, link_radius, centers, radii, arms, lower, step, siz
         free = True
         collides = False
         for k in range(n):
-            stretch = 0.0
-            for b in range(n):
-                stretch += arms[k, b] * half[b]
-            bound = 1e-9
-            for a in range(k + 1):
-                d0 = np.hypot(points[k, 0] - points[a, 0], points[k, 1] - points[a, 1])
-                d1 = np.hypot(points[k + 1, 0] - points[a, 0], points[k + 1, 1] - points[a, 1])
-                bound += half[a] * (max(d0, d1) + stretch)
+            bound = _link_motion_bound(points, arms, half, k)
             clearance = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
             if clearance <= bound:
                 free = False
@@ -186,14 +197,7 @@ def triangle_free(lengths, link_radius, centers, radii, arms, corners, depth):
         _joint_points(lengths, centre, points)
         free = True
         for k in range(n):
-            stretch = 0.0
-            for b in range(n):
-                stretch += arms[k, b] * half[b]
-            bound = 1e-9
-            for a in range(k + 1):
-                d0 = np.hypot(points[k, 0] - points[a, 0], points[k, 1] - points[a, 1])
-                d1 = np.hypot(points[k + 1, 0] - points[a, 0], points[k + 1, 1] - points[a, 1])
-                bound += half[a] * (max(d0, d1) + stretch)
+            bound = _link_motion_bound(points, arms, half, k)
             clearance = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
             if clearance <= 0.0:
                 return False

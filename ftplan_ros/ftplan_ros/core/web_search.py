@@ -691,69 +691,62 @@ def _triangle_free(mask, a, b, c, periodic):
 
 
 @numba.njit(cache=True)
-def _segment_walk(a, b):
-    """Cells (c, 2), unwrapped, that the segment a-b (in cell units) passes through.
+def _piece_middles(a, b):
+    """Return t in [0, 1] at the middle of each piece of segment a-b between grid crossings.
 
-    Exactly those between consecutive crossings of grid lines: a segment through a grid
-    corner does not enter the two cells beside it.
+    a and b are in cell units, of any dimension. Pieces shorter than a billionth of a
+    cell are rounding at a grid line and are left out, so a segment through a grid corner
+    does not enter the cells beside it.
     """
-    count = int(abs(np.floor(b[0]) - np.floor(a[0])) + abs(np.floor(b[1]) - np.floor(a[1]))) + 2
-    ts = np.empty(count)
-    ts[0] = 0.0
-    ts[1] = 1.0
-    n = 2
-    for axis in range(2):
-        low = min(a[axis], b[axis])
-        high = max(a[axis], b[axis])
-        line = np.floor(low) + 1.0
-        while line < high:
-            ts[n] = (line - a[axis]) / (b[axis] - a[axis])
-            n += 1
-            line += 1.0
-    ts = np.sort(ts[:n])
-    cells = np.empty((n, 2), dtype=np.int64)
-    found = 0
-    # Pieces shorter than a billionth of a cell are rounding at a grid line: not entered.
-    sliver = 1e-9 / max(1e-300, max(abs(b[0] - a[0]), abs(b[1] - a[1])))
-    for k in range(n - 1):
-        if ts[k + 1] - ts[k] <= sliver and not (k == 0 and n == 2):
-            continue
-        t = 0.5 * (ts[k] + ts[k + 1])
-        cells[found, 0] = int(np.floor(a[0] + t * (b[0] - a[0])))
-        cells[found, 1] = int(np.floor(a[1] + t * (b[1] - a[1])))
-        found += 1
-    return cells[:found]
-
-
-@numba.njit(cache=True)
-def _walk_free3(mask, a, b, periodic):
-    """Whether every 3-D cell the segment a-b (in cell units) passes through is in mask.
-
-    As `_segment_walk`: the cells between consecutive crossings of grid planes.
-    """
-    size = mask.shape[0]
     count = 2
-    for axis in range(3):
+    for axis in range(a.shape[0]):
         count += int(abs(np.floor(b[axis]) - np.floor(a[axis])))
     ts = np.empty(count)
     ts[0] = 0.0
     ts[1] = 1.0
     n = 2
-    for axis in range(3):
+    longest = 0.0
+    for axis in range(a.shape[0]):
         low = min(a[axis], b[axis])
         high = max(a[axis], b[axis])
+        longest = max(longest, high - low)
         line = np.floor(low) + 1.0
         while line < high:
             ts[n] = (line - a[axis]) / (b[axis] - a[axis])
             n += 1
             line += 1.0
     ts = np.sort(ts[:n])
-    index = np.empty(3, dtype=np.int64)
-    sliver = 1e-9 / max(1e-300, max(abs(b[0] - a[0]), max(abs(b[1] - a[1]), abs(b[2] - a[2]))))
+    sliver = 1e-9 / max(1e-300, longest)
+    middles = np.empty(n - 1)
+    found = 0
     for k in range(n - 1):
         if ts[k + 1] - ts[k] <= sliver and not (k == 0 and n == 2):
             continue
-        t = 0.5 * (ts[k] + ts[k + 1])
+        middles[found] = 0.5 * (ts[k] + ts[k + 1])
+        found += 1
+    return middles[:found]
+
+
+@numba.njit(cache=True)
+def _segment_walk(a, b):
+    """Cells (c, 2), unwrapped, that the segment a-b (in cell units) passes through."""
+    middles = _piece_middles(a, b)
+    cells = np.empty((middles.shape[0], 2), dtype=np.int64)
+    for k in range(middles.shape[0]):
+        t = middles[k]
+        cells[k, 0] = int(np.floor(a[0] + t * (b[0] - a[0])))
+        cells[k, 1] = int(np.floor(a[1] + t * (b[1] - a[1])))
+    return cells
+
+
+@numba.njit(cache=True)
+def _walk_free3(mask, a, b, periodic):
+    """Whether every 3-D cell the segment a-b (in cell units) passes through is in mask."""
+    size = mask.shape[0]
+    index = np.empty(3, dtype=np.int64)
+    middles = _piece_middles(a, b)
+    for k in range(middles.shape[0]):
+        t = middles[k]
         for axis in range(3):
             value = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
             if periodic[axis]:
