@@ -140,6 +140,33 @@ def test_collisions_are_reported_and_the_goal_is_recognised(ros):
     assert float(status.values['goal_error_m']) <= scene.task.goal_tolerance
 
 
+def test_a_collision_at_the_turn_of_a_command_is_reported_between_ticks(ros):
+    """Issue 10's soak: the sim checked the chord between two ticks, which cuts the
+    corners of a command. A joint1 swing that turns back 1e-5 rad inside a disk, at
+    0.05 rad per tick, passed unseen unless a tick landed on the turn."""
+    scene = load_scene(FIG3A)
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    swing = np.linspace(0.0, 2 * np.pi, 2000)  # joint1 of the stretched arm
+    first = int(np.argmax(checker.min_clearance(np.column_stack(
+        [swing, np.zeros_like(swing), np.zeros_like(swing)])) <= 0.0))
+    assert first > 0
+    clear, hit = swing[first - 1], swing[first]  # the first contact lies in between
+    while hit - clear > 1e-9:
+        middle = 0.5 * (clear + hit)
+        inside = checker.min_clearance(np.array([[middle, 0.0, 0.0]]))[0] <= 0.0
+        clear, hit = (clear, middle) if inside else (middle, hit)
+    turn = hit + 1e-5
+    assert checker.min_clearance(np.array([[turn, 0.0, 0.0]]))[0] < 0.0
+    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0], max_joint_speed=5.0,
+             rate=100.0)
+    ros.probe.listen(JointState, '/joint_states', 1000)
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    duration = turn / 5.0
+    command(ros, [[turn, 0.0, 0.0], [0.0, 0.0, 0.0]], [duration, 2.0 * duration])
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.level == 'ERROR'])[0]
+    assert 'collision' in status.message and int(status.values['collisions']) == 1
+
+
 def _configuration_at(scene, x):
     """A configuration (n,) with the end effector at x, by the core's Newton projection."""
     from ftplan_ros.core.manifolds import project_to_preimage

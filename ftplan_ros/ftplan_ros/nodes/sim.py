@@ -195,6 +195,16 @@ class Motion:
         a, b = self.positions[i], self.positions[i + 1]
         return a + s * (b - a), False
 
+    def swept(self, before: float, now: float) -> np.ndarray:
+        """Return the path (k, n) [rad] the arm follows from sim time `before` to `now`.
+
+        It holds the ends and every waypoint passed between them: the straight line
+        between the ends alone would cut the corners the motion turns.
+        """
+        passed = self.positions[(self.times > before - self.start) &
+                                (self.times < now - self.start)]
+        return np.vstack([self.sample(before)[0], passed, self.sample(now)[0]])
+
 
 class SimNode(Node):
     """A kinematic arm: follows commands, locks joints, reports collisions and arrival."""
@@ -456,18 +466,19 @@ class SimNode(Node):
         self.sim_time += dt
         previous = self.q
         try:
+            swept = None
             if self.motion is not None:
-                q, finished = self.motion.sample(self.sim_time)
+                swept = self.motion.swept(self.sim_time - dt, self.sim_time)
+                swept[0] = previous
                 for joint, value in self.locked.items():
-                    q[joint] = value
-                self.q = q
-                if finished:
+                    swept[:, joint] = value
+                self.q = swept[-1].copy()
+                if self.motion.sample(self.sim_time)[1]:
                     self.motion = None
             moved = bool(np.any(self.q != previous))
             if moved:
-                self._check_clearance(densify(np.vstack([previous, self.q]),
-                                              float(self.get_parameter(
-                                                  'collision_check_step').value)))
+                self._check_clearance(densify(swept, float(self.get_parameter(
+                    'collision_check_step').value)))
                 self._reported_stop = False
                 self.goal_reached = False
             self.publish_joint_state((self.q - previous) / dt)
