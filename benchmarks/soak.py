@@ -10,8 +10,9 @@ a random tolerated joint locked at a random moment of the nominal path. The dril
 split evenly over the scenes. Prints, per scene and in all: runs, runs that reached the
 goal without collision, the failures with their reasons, the approaches taken and the
 recovery time (lock event -> arm at the goal, wall time) p50/p95. Exit 1 if any run
-failed. The default scenes: fig3a and four of the tests' (test/ros/scenes): two crowded
-ones (the paper's arm among 12 disks), and two where the planner's favourite θ_s lies on
+failed. The default scenes: fig3a, crowded_sheets_100 (only the recovery sheets of issue 9
+solve it) and four of the tests' (test/ros/scenes): two crowded ones (the paper's arm
+among 12 disks), and two where the planner's favourite θ_s lies on
 another arc of M_s than the sim's start (split_arcs: a start on the sim's arc is
 preferred; detour: RRT-Connect goes round the disks).
 """
@@ -42,7 +43,8 @@ from ftplan_ros.bringup import Director, Progress, Suite  # noqa: E402
 from ftplan_ros.core import load_scene  # noqa: E402
 from ftplan_ros.plan_client import PlanClient  # noqa: E402
 
-SCENES = [REPO / 'config' / 'scenes' / 'fig3a.yaml'] + [
+SCENES = [REPO / 'config' / 'scenes' / f'{name}.yaml'
+          for name in ('fig3a', 'crowded_sheets_100')] + [
     REPO / 'test' / 'ros' / 'scenes' / f'{name}.yaml'
     for name in ('crowded_6', 'crowded_12', 'split_arcs', 'detour')]
 

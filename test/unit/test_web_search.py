@@ -14,6 +14,7 @@ import pytest
 from ftplan_testing import SCENES
 
 from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, recover
+from ftplan_ros.core.failure_planes import failure_hypercube
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.reference import Existence, decide_existence
 from ftplan_ros.core.verification import VerificationOptions, verify_surface
@@ -97,6 +98,13 @@ def test_the_sheets_plan_where_the_paper_does_not(sheets_plan):
     surface = result.surface
     assert surface.cuts.any() and surface.tolerated == (0, 1, 2)
     assert np.all(np.abs(result.theta_s) <= np.pi)  # wrapped, like the paper's plans
+    # The plan's hypercube holds the whole web, whose paths leave the box of θ_s and the
+    # goal points (the paper's V_sg) to go round the disks.
+    lower, upper = (np.array(bound) for bound in result.to_json()['hypercube'].values())
+    vertices = surface.paths.reshape(-1, 3)
+    assert np.all((lower <= vertices) & (vertices <= upper))
+    paper_lower, paper_upper = failure_hypercube(surface.theta_s, surface.goal_points)
+    assert np.any((vertices < paper_lower) | (vertices > paper_upper))
     paper_only = plan(scene, PlannerOptions(methods=(PAPER_METHOD,)))
     assert not paper_only.feasible
     assert paper_only.stats['method'] == PAPER_METHOD
@@ -117,6 +125,9 @@ def test_the_sheets_plan_passes_the_self_check_again_with_more_recoveries(sheets
 def test_a_paper_plan_is_named_for_its_method():
     result = plan(load_scene(SCENES / 'fig3a.yaml'))
     assert result.feasible and result.stats['method'] == PAPER_METHOD
+    # Its hypercube is the paper's V_sg: θ_s and the goal points span it.
+    box = failure_hypercube(result.surface.theta_s, result.surface.goal_points)
+    assert all(np.array_equal(a, b) for a, b in zip(result.hypercube, box, strict=True))
 
 
 # crowded.py -----------------------------------------------------------------------------
@@ -159,3 +170,12 @@ def test_a_sheets_plan_starts_at_a_wrapped_theta_s():
     assert result.feasible and result.stats['method'] == METHOD, result.reason
     assert np.all(np.abs(result.theta_s) <= np.pi), np.degrees(result.theta_s)
     assert np.array_equal(result.nominal_path[0], result.theta_s)
+
+
+@pytest.mark.parametrize('name', ['crowded_sheets_100', 'crowded_sheets_101',
+                                  'crowded_sheets_102'])
+def test_the_shipped_sheets_scenes_are_solved_by_the_sheets_alone(name):
+    scene = load_scene(SCENES / f'{name}.yaml')
+    assert not plan(scene, PlannerOptions(methods=(PAPER_METHOD,))).feasible
+    result = plan(scene)
+    assert result.feasible and result.stats['method'] == METHOD

@@ -65,10 +65,16 @@ class PlanResult:
 
     @property
     def hypercube(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Failure hypercube V_sg (lower, upper) (n,) [rad], in the paths' lifted angles."""
+        """The box (lower, upper) (n,) [rad] holding S_F, in the paths' lifted angles.
+
+        For the paper's surface it is the failure hypercube V_sg, spanned by θ_s and the
+        goal points (its paths are monotonic between them); the paths of recovery sheets
+        bend around obstacles, and the box grows to hold them.
+        """
         if self.surface is None:
             return None
-        return failure_hypercube(self.surface.theta_s, self.surface.goal_points)
+        vertices = self.surface.paths.reshape(-1, self.surface.paths.shape[-1])
+        return failure_hypercube(self.surface.theta_s, vertices)
 
     def to_json(self) -> dict:
         """Return the plan result JSON of CONTRACT.md (radians).
