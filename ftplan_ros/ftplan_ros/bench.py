@@ -16,10 +16,16 @@ from .core.paths import point_at_fraction
 from .core.scene import Scene
 
 
-def random_scene(rng: np.random.Generator, disks: int) -> Scene:
-    """Make the paper's arm a random task among `disks` random disks clear of base, start, goal."""
+def random_task(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Draw a start 1.8-2.6 m and a goal 0.9-1.5 m from the base (2,) [m], in any direction."""
     start = _polar(rng.uniform(1.8, 2.6), rng.uniform(-np.pi, np.pi))
     goal = _polar(rng.uniform(0.9, 1.5), rng.uniform(-np.pi, np.pi))
+    return start, goal
+
+
+def random_scene(rng: np.random.Generator, disks: int) -> Scene:
+    """Make the paper's arm a random task among `disks` random disks clear of base, start, goal."""
+    start, goal = random_task(rng)
     obstacles = []
     while len(obstacles) < disks:
         radius = rng.uniform(0.1, 0.3)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .bench import random_task
 from .core import parse_scene
 from .core.reference import Existence, decide_existence
 from .core.scene import Scene
@@ -46,8 +47,7 @@ def crowded_scene(rng: np.random.Generator, disks: int = 12, attempts: int = 40,
 def _proved_task(rng: np.random.Generator, cells: int, name: str) -> tuple[np.ndarray, np.ndarray]:
     """Draw start and goal [m] until the obstacle-free task has a proved plan."""
     for _ in range(TASK_DRAWS):
-        start = _polar(rng.uniform(1.8, 2.6), rng.uniform(-np.pi, np.pi))
-        goal = _polar(rng.uniform(0.9, 1.5), rng.uniform(-np.pi, np.pi))
+        start, goal = random_task(rng)
         if decide_existence(_scene([], start, goal, name), cells).existence is Existence.YES:
             return start, goal
     raise RuntimeError(f'no random task of {TASK_DRAWS} has a plan the reference proves on '
@@ -82,7 +82,3 @@ def _scene(obstacles: list[dict], start: np.ndarray, goal: np.ndarray, name: str
                         'obstacles': obstacles,
                         'task': {'start': start.round(3).tolist(), 'goal': goal.round(3).tolist()}},
                        name=name)
-
-
-def _polar(radius: float, angle: float) -> np.ndarray:
-    return radius * np.array([np.cos(angle), np.sin(angle)])
