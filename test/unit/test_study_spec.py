@@ -4,8 +4,10 @@ import io
 import json
 import math
 import re
+import socket
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -255,6 +257,24 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line_naming_the_flag(tmp_path
     lines = run.stderr.strip().splitlines()
     assert run.returncode == 2 and len(lines) == 1, run.stderr
     assert lines[0].startswith('ftplan: error: --scheduler: cannot connect'), run.stderr
+
+
+def test_a_server_that_accepts_but_never_answers_is_given_up_naming_the_flag(tmp_path):
+    """Issue 11's note: Dask's handshake has no deadline, so this hung the study for good."""
+    server = socket.create_server(('127.0.0.1', 0))
+    accepted = []
+    threading.Thread(target=lambda: accepted.append(server.accept()), daemon=True).start()
+    spec = tmp_path / 'spec.yaml'
+    spec.write_text(yaml.safe_dump(spec_with(MAP, ('scene',), str(SCENES / 'fig3a.yaml'))))
+    with server:
+        run = subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', 'study', spec, '--out',
+                              tmp_path / 'out', '--scheduler',
+                              f'tcp://127.0.0.1:{server.getsockname()[1]}'],
+                             capture_output=True, text=True, timeout=120)
+    lines = run.stderr.strip().splitlines()
+    assert accepted and run.returncode == 2 and len(lines) == 1, run.stderr
+    assert lines[0].startswith('ftplan: error: --scheduler: cannot connect') and \
+        'no Dask scheduler answered' in lines[0], run.stderr
 
 # --- the results folder ---------------------------------------------------------------------------
 

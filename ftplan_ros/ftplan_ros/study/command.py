@@ -15,6 +15,7 @@ import contextlib
 import logging
 import os
 import sys
+import threading
 from pathlib import Path
 
 import dask
@@ -26,7 +27,8 @@ from .runner import StudyError, run_study
 from .spec import Study, load_study
 from .summary import summarize
 
-CONNECT_TIMEOUT_S = 20.0
+CONNECT_TIMEOUT_S = 20.0  # [s] Dask's deadline for a connection to the scheduler
+HANDSHAKE_SLACK_S = 5.0   # [s] then how long the handshake may take before we give up
 
 
 def run_study_command(spec: Path, out: Path, scheduler: str | None, workers: int | None,
@@ -71,12 +73,7 @@ def run_study_command(spec: Path, out: Path, scheduler: str | None, workers: int
 def open_client(scheduler: str | None, workers: int | None):
     """Open a client of the cluster at `scheduler`, or of a new LocalCluster of `workers`."""
     if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
-        except Exception as error:  # noqa: BLE001 - whatever fails here, the address is bad
-            raise InputError('--scheduler', f'cannot connect to {scheduler}: '
-                             f'{type(error).__name__}: {error}') from None
-        with client:
+        with _connect(scheduler) as client:
             yield client
         return
     count = workers or (len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity')
@@ -91,6 +88,32 @@ def open_client(scheduler: str | None, workers: int | None):
                          dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
             Client(cluster) as client:
         yield client
+
+
+def _connect(scheduler: str) -> Client:
+    """Return a client of the scheduler at `scheduler`, or raise InputError naming the flag.
+
+    Dask waits for the server's side of its handshake without a deadline, so a server
+    that accepts the connection but never answers would hang the study: the client is
+    made in a daemon thread that is given up after CONNECT_TIMEOUT_S and a little more.
+    """
+    made: dict = {}
+
+    def connect() -> None:
+        try:
+            made['client'] = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+        except Exception as error:  # noqa: BLE001 - whatever fails here, the address is bad
+            made['error'] = error
+
+    thread = threading.Thread(target=connect, name='ftplan-connect', daemon=True)
+    thread.start()
+    thread.join(CONNECT_TIMEOUT_S + HANDSHAKE_SLACK_S)
+    if 'client' in made:
+        return made['client']
+    error = made.get('error')
+    why = f'{type(error).__name__}: {error}' if error is not None else \
+        f'no Dask scheduler answered within {CONNECT_TIMEOUT_S + HANDSHAKE_SLACK_S:.0f} s'
+    raise InputError('--scheduler', f'cannot connect to {scheduler}: {why}')
 
 
 @contextlib.contextmanager
