@@ -175,8 +175,9 @@ def parse_scene(data: Any, name: str = 'scene', directory: Path | None = None,
     frame_id = data.get('frame_id', 'base_link')
     if not isinstance(frame_id, str) or not frame_id:
         raise InputError('frame_id', 'must be a non-empty string')
+    planar = isinstance(robot, PlanarChain)
     obstacles = tuple(
-        parse_obstacle(item, f'obstacles[{k}]')
+        parse_obstacle(item, f'obstacles[{k}]', planar)
         for k, item in enumerate(sequence(data.get('obstacles') or [], 'obstacles')))
     scene = Scene(robot, obstacles, None, frame_id, name,
                   parse_tolerated(data.get('tolerate'), robot.joint_names))
@@ -338,8 +339,12 @@ def _joint_names(names: Any, n: int) -> list[str]:
     return names
 
 
-def parse_obstacle(data: Any, where: str) -> Obstacle:
-    """Validate one obstacle mapping; `where` names it in errors (e.g. `obstacles[0]`)."""
+def parse_obstacle(data: Any, where: str, planar: bool = True) -> Obstacle:
+    """Validate one obstacle mapping; `where` names it in errors (e.g. `obstacles[0]`).
+
+    Beside a planar robot a `center` or box `size` may leave out z; beside a spatial one
+    it needs all three values.
+    """
     data = mapping(data, where)
     shape = data.get('type')
     if shape not in OBSTACLE_TYPES:
@@ -350,12 +355,12 @@ def parse_obstacle(data: Any, where: str) -> Obstacle:
     required = {'sphere': ('radius',), 'box': ('size',), 'cylinder': ('radius',)}[shape]
     check_keys(data, where, required=('type', 'center') + required,
                 optional=tuple(k for k in per_shape[shape] if k not in required))
-    center = _point3(data['center'], f'{where}.center')
+    center = _point3(data['center'], f'{where}.center', planar)
     rpy = tuple(vector(data.get('rpy', [0.0, 0.0, 0.0]), f'{where}.rpy', length=3))
     if shape == 'box':
         size = vector(data['size'], f'{where}.size')
-        if len(size) not in (2, 3):
-            raise InputError(f'{where}.size', f'needs 2 or 3 values, got {len(size)}')
+        if len(size) not in _DIMENSIONS[planar]:
+            raise InputError(f'{where}.size', _values_needed(planar, len(size)))
         size = size + [1.0] * (3 - len(size))  # planar boxes get a unit height
         for k, value in enumerate(size):
             if value <= 0.0:
@@ -500,8 +505,17 @@ def _joint_limit(data: Any, where: str) -> tuple[float, float] | None:
     return (low, high)
 
 
-def _point3(data: Any, where: str) -> tuple[float, float, float]:
+# The lengths a point or a size may have beside a planar (True) or a spatial robot.
+_DIMENSIONS = {True: (2, 3), False: (3,)}
+
+
+def _values_needed(planar: bool, got: int) -> str:
+    return f'needs 2 or 3 values, got {got}' if planar else \
+        f'needs 3 values (x, y, z) beside a spatial robot, got {got}'
+
+
+def _point3(data: Any, where: str, planar: bool = True) -> tuple[float, float, float]:
     values = vector(data, where)
-    if len(values) not in (2, 3):
-        raise InputError(where, f'needs 2 or 3 values, got {len(values)}')
+    if len(values) not in _DIMENSIONS[planar]:
+        raise InputError(where, _values_needed(planar, len(values)))
     return tuple(values + [0.0] * (3 - len(values)))
