@@ -187,6 +187,7 @@ def test_continuous_and_unaligned_joints(bot_urdf_file):
 def urdf_file(tmp_path):
     """Write a variant of the test robot's URDF (and its mesh) into tmp_path; return its path."""
     write_binary_stl(tmp_path / 'tet.stl', *TETRAHEDRON)
+    (tmp_path / 'garbage.stl').write_bytes(b'solid \x00\xff not a mesh\n' * 7)
 
     def write(xml):
         path = tmp_path / 'variant.urdf'
@@ -219,6 +220,8 @@ PRISMATIC = bot_urdf().replace('<joint name="elbow" type="revolute"',
                  'robot.file', "'elbow'.* axis", id='zero-axis'),
     pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file', 'collision geometry',
                  id='missing-mesh-file'),
+    pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file', 'collision geometry',
+                 id='garbage-mesh-file'),
     pytest.param(bot_urdf(), 'l1', 'l3', 'robot.base_link', "'l3' moves with joint 'elbow'",
                  id='base-below-the-tip'),
     pytest.param(bot_urdf(), 'base', None, 'robot.tip_link', "no joint moves 'base'",

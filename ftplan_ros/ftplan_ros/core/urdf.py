@@ -42,7 +42,8 @@ def chain_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     try:
         model = pin.buildModelFromXML(xml)
     except (ValueError, RuntimeError) as error:
-        raise InputError(f'{where}.file', f'is not a URDF Pinocchio can read: {error}') from None
+        raise InputError(f'{where}.file', f'is not a URDF Pinocchio can read: '
+                         f'{_one_line(error)}') from None
     base_link = base_link or _root_link(model)
     base = _body_frame(model, base_link, f'{where}.base_link')
     tip = _body_frame(model, tip_link, f'{where}.tip_link')
@@ -65,7 +66,8 @@ def chain_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
         geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION,
                                                package_dirs=list(mesh_dirs))
     except (ValueError, RuntimeError) as error:
-        raise InputError(f'{where}.file', f'cannot load its collision geometry: {error}') from None
+        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
+                         f'{_one_line(error)}') from None
     locked = [j for j in range(1, model.njoints) if j not in path]
     if locked:
         model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
@@ -173,3 +175,16 @@ def _child_link(model: pin.Model, joint: int) -> str:
     """Return the link a joint moves directly (its first body frame)."""
     return next(f.name for f in model.frames
                 if f.type == pin.FrameType.BODY and f.parentJoint == joint)
+
+
+def _one_line(error: Exception, most: int = 300) -> str:
+    """Pinocchio's message in one line of at most `most` characters.
+
+    Its C++ errors span several lines (file, function, line, then the message): only the
+    message and what follows it are kept.
+    """
+    text = str(error)
+    if 'message:' in text:
+        text = text.split('message:', 1)[1]
+    text = ' '.join(text.split())
+    return text if len(text) <= most else text[:most - 3] + '...'
