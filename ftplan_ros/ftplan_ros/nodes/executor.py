@@ -70,7 +70,6 @@ from ftplan_msgs_py import (
     read_failure_surface,
     read_joint_state,
     read_joint_trajectory,
-    read_locked_joint,
 )
 from ftplan_ros.core import (
     FailureSurface,
@@ -85,7 +84,12 @@ from ftplan_ros.core.approach import Approach, ApproachOptions, ApproachPlanner,
 from ftplan_ros.core.paths import cumulative_fractions, point_at_fraction
 
 from .inputs import read_arm_state
-from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, JointLocks, lock_angle_problem
+from .locks import (
+    DEFAULT_LOCK_ANGLE_TOLERANCE,
+    JointLocks,
+    lock_angle_problem,
+    read_lock_event,
+)
 from .motion import progress_along, time_path
 from .obstacles import ObstacleSet
 from .params import (
@@ -658,20 +662,13 @@ class ExecutorNode(Node):
 
     def locked_joint_callback(self, msg: JointState) -> None:
         """Handle a failure: during the nominal phase, stop and prepare the recovery."""
-        try:
-            event = read_locked_joint(msg)
-        except ValueError as error:
-            self.diagnostics.rejected('input', f'ignored locked-joint event: {error}')
+        found = read_lock_event(
+            msg, None if self.scene is None else self.names, self.source.waiting,
+            lambda why, name: self.diagnostics.rejected(
+                'input', why, None if name is None else {'joint': name}))
+        if found is None:
             return
-        if self.scene is None:
-            self.diagnostics.rejected('input', f'ignored lock of {event.name}: '
-                                      f'{self.source.waiting}', {'joint': event.name})
-            return
-        if event.name not in self.names:
-            self.diagnostics.rejected('input', f'ignored lock of unknown joint {event.name!r}; '
-                                      f'the arm has {self.names}', {'joint': event.name})
-            return
-        joint = self.names.index(event.name)
+        event, joint = found
         current = None if self.q is None else float(self.q[joint])
         problem = lock_angle_problem(event.name, event.angle, current,
                                      bool(self.scene.robot.periodic[joint]),

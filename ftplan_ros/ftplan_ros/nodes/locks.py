@@ -3,16 +3,19 @@
 A joint that locks stays locked until it is declared repaired (the executor's `~/reset`),
 whatever the executor was doing when the event came: a lock while idle is remembered as
 much as one in an execution. `moved` tells whether a path would move a locked joint, so
-the executor never commands one; `lock_angle_problem` is the one bound on a lock event's
-angle that the executor and the sim share.
+the executor never commands one. `read_lock_event` and `lock_angle_problem` are what the
+executor and the sim share of a lock event: how it is read, and the one bound on its angle.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from sensor_msgs.msg import JointState
 
+from ftplan_msgs_py import LockedJoint, read_locked_joint
 from ftplan_ros.core.angles import configuration_difference
 
 LOCKED_TOLERANCE = 1e-9  # [rad] a command may differ this much from a locked joint's angle
@@ -28,6 +31,29 @@ class Lock:
     joint: int
     angle: float | None
     execution: int | None  # None: it locked while no execution was running
+
+
+def read_lock_event(msg: JointState, names: Sequence[str] | None, waiting: str,
+                    reject: Callable[[str, str | None], None],
+                    ) -> tuple[LockedJoint, int] | None:
+    """Read a locked-joint event and its joint's index among `names`, or refuse it.
+
+    `names` is None while the node has no scene (`waiting` says what it waits for). A
+    refusal calls `reject(why, the joint's name or None)` and returns None.
+    """
+    try:
+        event = read_locked_joint(msg)
+    except ValueError as error:
+        reject(f'ignored locked-joint event: {error}', None)
+        return None
+    if names is None:
+        reject(f'ignored lock of {event.name}: {waiting}', event.name)
+        return None
+    if event.name not in names:
+        reject(f'ignored lock of unknown joint {event.name!r}; the arm has {list(names)}',
+               event.name)
+        return None
+    return event, list(names).index(event.name)
 
 
 def lock_angle_problem(name: str, angle: float | None, current: float | None,

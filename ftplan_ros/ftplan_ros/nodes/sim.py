@@ -51,7 +51,6 @@ from visualization_msgs.msg import MarkerArray
 from ftplan_msgs_py import (
     create_joint_state,
     read_joint_trajectory,
-    read_locked_joint,
     time_to_seconds,
 )
 from ftplan_ros.core import CollisionChecker, InputError, Robot, Scene, Task, task_errors
@@ -62,7 +61,7 @@ from ftplan_ros.core.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TO
 from ftplan_ros.core.task_space import POINT_SIZE, unit_vector
 
 from .inputs import angle_problem
-from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem
+from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem, read_lock_event
 from .obstacles import ObstacleSet
 from .params import (
     add_validators,
@@ -388,20 +387,12 @@ class SimNode(Node):
 
     def locked_joint_callback(self, msg: JointState) -> None:
         """Lock a joint where it is (or at the angle given) and brake the arm."""
-        try:
-            event = read_locked_joint(msg)
-        except ValueError as error:
-            self.diagnostics.rejected('input', f'ignored locked-joint event: {error}')
+        found = read_lock_event(msg, None if self.scene is None else self.names,
+                                self.source.waiting,
+                                lambda why, _: self.diagnostics.rejected('input', why))
+        if found is None:
             return
-        if self.scene is None:
-            self.diagnostics.rejected('input', f'ignored lock of {event.name}: '
-                                      f'{self.source.waiting}')
-            return
-        if event.name not in self.names:
-            self.diagnostics.rejected('input', f'ignored lock of unknown joint {event.name!r}; '
-                                      f'the arm has {self.names}')
-            return
-        joint = self.names.index(event.name)
+        event, joint = found
         if joint in self.locked:
             return
         problem = lock_angle_problem(event.name, event.angle, float(self.q[joint]),
