@@ -140,10 +140,12 @@ def test_collisions_are_reported_and_the_goal_is_recognised(ros):
     assert float(status.values['goal_error_m']) <= scene.task.goal_tolerance
 
 
-def test_a_collision_at_the_turn_of_a_command_is_reported_between_ticks(ros):
+@pytest.mark.parametrize('room', [None, 0.01], ids=['swing', 'within-a-tick'])
+def test_a_collision_at_the_turn_of_a_command_is_reported_between_ticks(ros, room):
     """Issue 10's soak: the sim checked the chord between two ticks, which cuts the
     corners of a command. A joint1 swing that turns back 1e-5 rad inside a disk, at
-    0.05 rad per tick, passed unseen unless a tick landed on the turn."""
+    0.05 rad per tick, passed unseen unless a tick landed on the turn; so did a short
+    swing out and back that a single tick holds whole."""
     scene = load_scene(FIG3A)
     checker = CollisionChecker(scene.robot, scene.obstacles)
     swing = np.linspace(0.0, 2 * np.pi, 2000)  # joint1 of the stretched arm
@@ -157,12 +159,15 @@ def test_a_collision_at_the_turn_of_a_command_is_reported_between_ticks(ros):
         clear, hit = (clear, middle) if inside else (middle, hit)
     turn = hit + 1e-5
     assert checker.min_clearance(np.array([[turn, 0.0, 0.0]]))[0] < 0.0
-    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0], max_joint_speed=5.0,
+    # The swing starts from the stretched arm; the other starts `room` [rad] short of the
+    # disk, and its way out and back takes 4 ms of one 10 ms tick, ending where it began.
+    start = 0.0 if room is None else hit - room
+    ros.make(SimNode, FIG3A, initial_configuration=[start, 0.0, 0.0], max_joint_speed=5.0,
              rate=100.0)
     ros.probe.listen(JointState, '/joint_states', 1000)
     wait_for(lambda: ros.probe.received('/joint_states'))
-    duration = turn / 5.0
-    command(ros, [[turn, 0.0, 0.0], [0.0, 0.0, 0.0]], [duration, 2.0 * duration])
+    duration = (turn - start) / 5.0
+    command(ros, [[turn, 0.0, 0.0], [start, 0.0, 0.0]], [duration, 2.0 * duration])
     status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.level == 'ERROR'])[0]
     assert 'collision' in status.message and int(status.values['collisions']) == 1
 

@@ -4,7 +4,7 @@ One panel per joint (n rows) over a shared x axis, the fraction 0..1 of the nomi
 path's joint-space length; angles in degrees. Each panel shows, for its joint j:
 
 - the failure hypercube V_sg as a band [lower_j, upper_j] (the box spanned by θ_s and
-  the goal points of S_F; for recovery sheets, the box their bent paths need);
+  the goal points of S_F);
 - the spread of the failure surface S_F: its paths run straight from θ_s to the goal
   points, so at waypoint w they span the smallest to the largest θ_j of the web;
 - the nominal path θ_j(progress), and thin, in the colour of joint i, the path to the

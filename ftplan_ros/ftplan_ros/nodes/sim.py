@@ -466,7 +466,8 @@ class SimNode(Node):
                 self.q = swept[-1].copy()
                 if self.motion.sample(self.sim_time)[1]:
                     self.motion = None
-            moved = bool(np.any(self.q != previous))
+            # From the path, not its end: a command may go out and back within a tick.
+            moved = swept is not None and bool(np.any(swept != previous))
             if moved:
                 self._check_clearance(densify(swept, float(self.get_parameter(
                     'collision_check_step').value)))

@@ -98,18 +98,27 @@ def _connect(scheduler: str) -> Client:
     made in a daemon thread that is given up after CONNECT_TIMEOUT_S and a little more.
     """
     made: dict = {}
+    lock = threading.Lock()
 
     def connect() -> None:
         try:
-            made['client'] = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
-        except Exception as error:  # noqa: BLE001 - whatever fails here, the address is bad
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+        except BaseException as error:  # noqa: BLE001 - whatever fails here, the address is bad
             made['error'] = error
+            return
+        with lock:
+            if made.get('abandoned'):  # too late: nobody will close it but us
+                client.close()
+            else:
+                made['client'] = client
 
     thread = threading.Thread(target=connect, name='ftplan-connect', daemon=True)
     thread.start()
     thread.join(CONNECT_TIMEOUT_S + HANDSHAKE_SLACK_S)
-    if 'client' in made:
-        return made['client']
+    with lock:
+        if 'client' in made:
+            return made['client']
+        made['abandoned'] = True
     error = made.get('error')
     why = f'{type(error).__name__}: {error}' if error is not None else \
         f'no Dask scheduler answered within {CONNECT_TIMEOUT_S + HANDSHAKE_SLACK_S:.0f} s'
