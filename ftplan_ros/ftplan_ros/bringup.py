@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -310,10 +311,6 @@ def _check(args: argparse.Namespace) -> Scene:
     return scene
 
 
-def _raise_interrupt(signum, frame) -> None:
-    raise KeyboardInterrupt
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run the bringup; return the exit code (0: every run reached the goal safely)."""
     args = _parser().parse_args(argv)
@@ -324,17 +321,21 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     progress = Progress()
     runs_wanted = len(args.drill) + args.trials or 1
-    # Ctrl-C and SIGTERM raise KeyboardInterrupt here, in the director's thread.
     rclpy.init(args=['--ros-args'] + (args.ros_args or []),
                signal_handler_options=SignalHandlerOptions.NO)
-    previous_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    # Ctrl-C and SIGTERM only set `interrupted`: the client raises KeyboardInterrupt from
+    # its next wait. Raised by the signal itself, it could land inside rclpy's executor,
+    # where it was lost (runs went on) or left it broken.
+    interrupted = threading.Event()
+    previous = {number: signal.signal(number, lambda signum, frame: interrupted.set())
+                for number in (signal.SIGINT, signal.SIGTERM)}
     suite = client = None
     try:
         progress.line('starting the planner, executor, sim and injector nodes')
         suite = Suite(args.scene.resolve(), speed=args.speed, rate=args.rate,
                       drills=args.drill, random_drills=args.trials, seed=args.seed,
                       log_level=None if args.verbose else LoggingSeverity.WARN)
-        client = PlanClient()
+        client = PlanClient(interrupted=interrupted)
         director = Director(client, scene, progress)
         motion = director.plan()
         if not motion.succeeded:
@@ -363,7 +364,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f'ftplan-bringup: error: {error}', file=sys.stderr)
         return 2
     finally:
-        signal.signal(signal.SIGTERM, previous_term)
+        for number, handler in previous.items():
+            signal.signal(number, handler)
         if client is not None:
             client.destroy_node()
         if suite is not None:

@@ -23,6 +23,7 @@ block while they spin.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -128,8 +129,14 @@ class PlanClient(Node):
 
     def __init__(self, node_name: str = 'ftplan_plan_client', *,
                  planner_name: str = PLANNER_NODE, executor_name: str = EXECUTOR_NODE,
-                 **kwargs):
+                 interrupted: threading.Event | None = None, **kwargs):
+        """Make the client node; see the class docstring.
+
+        `interrupted`, once set (e.g. by a signal handler), makes every wait raise
+        KeyboardInterrupt, between two turns of the executor, where it is safe.
+        """
         super().__init__(node_name, **kwargs)
+        self._interrupted = interrupted
         self._planner_status = f'{planner_name}: plan'
         self._executor_status = f'{executor_name}: execution'
         self.plan_client = self.create_client(GetPlan, PLAN_SERVICE)
@@ -163,6 +170,8 @@ class PlanClient(Node):
         """Spin this client until `done()` or `timeout` [s]; return whether it is done."""
         deadline = time.monotonic() + timeout
         while not done():
+            if self._interrupted is not None and self._interrupted.is_set():
+                raise KeyboardInterrupt
             left = deadline - time.monotonic()
             if left <= 0.0:
                 return False
