@@ -108,10 +108,11 @@ def test_sim_motion_samples_linearly_and_ends_exactly():
 def test_the_sim_motion_sweeps_through_every_waypoint_it_passes():
     corner = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     motion = Motion(corner, np.array([0.0, 1.0, 2.0]), start=10.0)
-    swept = motion.swept(10.5, 11.5)
-    assert np.allclose(swept, [[0.5, 0.0], [1.0, 0.0], [1.0, 0.5]])
-    assert np.allclose(motion.swept(10.2, 10.4), [[0.2, 0.0], [0.4, 0.0]])
-    assert np.allclose(motion.swept(11.5, 13.0), [[1.0, 0.5], [1.0, 1.0], [1.0, 1.0]])
+    swept, finished = motion.swept(10.5, 11.5)
+    assert np.allclose(swept, [[0.5, 0.0], [1.0, 0.0], [1.0, 0.5]]) and not finished
+    assert np.allclose(motion.swept(10.2, 10.4)[0], [[0.2, 0.0], [0.4, 0.0]])
+    swept, finished = motion.swept(11.5, 13.0)
+    assert np.allclose(swept, [[1.0, 0.5], [1.0, 1.0], [1.0, 1.0]]) and finished
 
 
 def test_the_default_initial_configuration_is_at_the_task_start_and_clear():

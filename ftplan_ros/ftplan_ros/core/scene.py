@@ -359,8 +359,7 @@ def parse_obstacle(data: Any, where: str, planar: bool = True) -> Obstacle:
     rpy = tuple(vector(data.get('rpy', [0.0, 0.0, 0.0]), f'{where}.rpy', length=3))
     if shape == 'box':
         size = vector(data['size'], f'{where}.size')
-        if len(size) not in _DIMENSIONS[planar]:
-            raise InputError(f'{where}.size', _values_needed(planar, len(size)))
+        _check_dimensions(size, f'{where}.size', planar)
         size = size + [1.0] * (3 - len(size))  # planar boxes get a unit height
         for k, value in enumerate(size):
             if value <= 0.0:
@@ -505,17 +504,15 @@ def _joint_limit(data: Any, where: str) -> tuple[float, float] | None:
     return (low, high)
 
 
-# The lengths a point or a size may have beside a planar (True) or a spatial robot.
-_DIMENSIONS = {True: (2, 3), False: (3,)}
-
-
-def _values_needed(planar: bool, got: int) -> str:
-    return f'needs 2 or 3 values, got {got}' if planar else \
-        f'needs 3 values (x, y, z) beside a spatial robot, got {got}'
+def _check_dimensions(values: list[float], where: str, planar: bool) -> None:
+    """Refuse a point or size that is not x, y, z (or x, y beside a planar robot)."""
+    if len(values) == 3 or (planar and len(values) == 2):
+        return
+    raise InputError(where, f'needs 2 or 3 values, got {len(values)}' if planar else
+                     f'needs 3 values (x, y, z) beside a spatial robot, got {len(values)}')
 
 
 def _point3(data: Any, where: str, planar: bool = True) -> tuple[float, float, float]:
     values = vector(data, where)
-    if len(values) not in _DIMENSIONS[planar]:
-        raise InputError(where, _values_needed(planar, len(values)))
+    _check_dimensions(values, where, planar)
     return tuple(values + [0.0] * (3 - len(values)))

@@ -194,15 +194,16 @@ class Motion:
         a, b = self.positions[i], self.positions[i + 1]
         return a + s * (b - a), False
 
-    def swept(self, before: float, now: float) -> np.ndarray:
-        """Return the path (k, n) [rad] the arm follows from sim time `before` to `now`.
+    def swept(self, before: float, now: float) -> tuple[np.ndarray, bool]:
+        """Return the path (k, n) [rad] followed from sim time `before` to `now`, and if it ended.
 
-        It holds the ends and every waypoint passed between them: the straight line
+        The path holds the ends and every waypoint passed between them: the straight line
         between the ends alone would cut the corners the motion turns.
         """
         passed = self.positions[(self.times > before - self.start) &
                                 (self.times < now - self.start)]
-        return np.vstack([self.sample(before)[0], passed, self.sample(now)[0]])
+        end, finished = self.sample(now)
+        return np.vstack([self.sample(before)[0], passed, end]), finished
 
 
 class SimNode(Node):
@@ -459,12 +460,12 @@ class SimNode(Node):
         try:
             swept = None
             if self.motion is not None:
-                swept = self.motion.swept(self.sim_time - dt, self.sim_time)
+                swept, finished = self.motion.swept(self.sim_time - dt, self.sim_time)
                 swept[0] = previous
                 for joint, value in self.locked.items():
                     swept[:, joint] = value
                 self.q = swept[-1].copy()
-                if self.motion.sample(self.sim_time)[1]:
+                if finished:
                     self.motion = None
             # From the path, not its end: a command may go out and back within a tick.
             moved = swept is not None and bool(np.any(swept != previous))
