@@ -74,6 +74,7 @@ class Probe(Node):
         self._lock = threading.Lock()
         self.messages: dict[str, list] = {}
         self.publishers_: dict[str, object] = {}
+        self.subscriptions_: dict[str, object] = {}
         self.listen(Log, '/rosout', QoSProfile(depth=1000))
 
     def listen(self, msg_type, topic: str, qos=10) -> None:
@@ -84,7 +85,18 @@ class Probe(Node):
             with self._lock:
                 self.messages[topic].append(msg)
 
-        self.create_subscription(msg_type, topic, record, qos)
+        self.subscriptions_[topic] = self.create_subscription(msg_type, topic, record, qos)
+
+    def hear_from(self, topic: str, writers: int = 1, timeout: float = WAIT) -> None:
+        """Wait until `writers` publishers match the probe's recording of `topic`.
+
+        Call it before a node publishes something once on a volatile topic (a status), as
+        `advertise` is called before the probe publishes: a message sent before the match
+        is lost, and a loaded machine can take seconds to discover a new process.
+        """
+        subscription = self.subscriptions_[topic]
+        wait_for(lambda: subscription.get_publisher_count() >= writers, timeout,
+                 f'{writers} writers of {topic}')
 
     def received(self, topic: str) -> list:
         """Return a copy of the messages recorded on `topic` so far."""

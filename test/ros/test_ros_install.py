@@ -127,6 +127,7 @@ def test_the_installed_planner_takes_a_panda_from_robot_description(ros, process
                          '--params-file', PARAMS / 'planner.yaml',
                          '--params-file', PARAMS / 'robot_description.yaml',
                          '-p', f'scene_file:={scene_file}'])
+    ros.probe.hear_from('/diagnostics', timeout=60.0)  # the planner reports the robot once
     ros.probe.advertise(String, '/robot_description', LATCHED_QOS)
     ros.probe.publish(String, '/robot_description', String(data=PANDA_URDF.read_text()),
                       LATCHED_QOS)
