@@ -4,6 +4,8 @@ Rows of the issue's table are named in the docstrings; every test failed on the 
 before its fix.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
@@ -256,5 +258,26 @@ def test_the_plan_says_how_the_arm_gets_to_theta_s_and_the_executor_goes_that_wa
     path = read_joint_trajectory(approach, NAMES).positions
     start = read_joint_state(ros.probe.received('/joint_states')[-1], NAMES)
     assert np.allclose(path[0], start, atol=1e-12) and np.allclose(path[-1], motion.theta_s)
+    done = state_of(ros, execute(ros), 'done')
+    assert done.values['approach'].startswith('by the path given (')
+
+
+def test_the_executor_takes_the_planners_approach_that_ends_whole_turns_from_theta_s(ros):
+    """On detour the planner's RRT-Connect approach ends at θ_s with joint2 a turn up. The
+    executor took only an exact end, so it planned an approach of its own in every
+    execution (up to 3 s, while its watchdog counted the joint states waiting behind)."""
+    scene = Path(__file__).parent / 'scenes' / 'detour.yaml'
+    ros.make(PlannerNode, scene)
+    ros.make(ExecutorNode, scene)
+    ros.make(SimNode, scene, max_joint_speed=8.0)
+    ros.probe.listen(JointTrajectory, '/ftplan/plan/approach', LATCHED_QOS)
+    ros.probe.listen(JointState, '/joint_states')
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    motion = plan(ros)  # detour's task is fig3a's: [2, 0] -> [1, 0]
+    approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
+                                 if stamp_key(m.header.stamp) == motion.stamp])[0]
+    end = read_joint_trajectory(approach, NAMES).positions[-1]
+    turns = (end - motion.theta_s) / (2 * np.pi)
+    assert np.allclose(turns, np.round(turns), atol=1e-9) and np.any(np.round(turns))
     done = state_of(ros, execute(ros), 'done')
     assert done.values['approach'].startswith('by the path given (')

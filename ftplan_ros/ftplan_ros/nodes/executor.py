@@ -80,6 +80,7 @@ from ftplan_ros.core import (
     recover,
     task_errors,
 )
+from ftplan_ros.core.angles import configuration_difference
 from ftplan_ros.core.approach import Approach, ApproachOptions, ApproachPlanner, Route
 from ftplan_ros.core.paths import cumulative_fractions, point_at_fraction
 
@@ -525,15 +526,17 @@ class ExecutorNode(Node):
     def _approach(self, q: np.ndarray, theta_s: np.ndarray) -> Approach:
         """Find a certified path (k, n) from q to θ_s plus whole turns (core/approach.py).
 
-        The planner's approach of this plan is taken when it starts where the arm stands
-        and is still clear of the obstacles; else one is planned now. A single point
+        The planner's approach of this plan is taken when it starts where the arm stands,
+        ends at θ_s (whole turns apart on periodic joints) and is still clear of the
+        obstacles; else one is planned now. A single point
         (1, n) means the arm is at θ_s already.
         """
         arrival = float(self.get_parameter('arrival_tolerance').value)
         planner = self._approach_planner()
         given = self._planned_approach()
-        if given is not None and np.max(np.abs(given[0] - q)) <= arrival and \
-                np.max(np.abs(given[-1] - theta_s)) <= arrival:
+        periodic = self.scene.robot.periodic
+        if given is not None and np.max(np.abs(given[0] - q)) <= arrival and np.max(np.abs(
+                configuration_difference(given[-1], theta_s, periodic))) <= arrival:
             given[0] = q
             if planner.certify(given):
                 return Approach(given, Route.GIVEN)
@@ -829,7 +832,9 @@ class ExecutorNode(Node):
         if self.state not in ACTIVE or (self.state == State.APPROACHING and
                                         ex.command is None and not ex.reapproach):
             return False  # not moving yet: start_timeout's case
-        quiet = time.monotonic() - max(self._last_joint_state, ex.started)
+        # From the last command too: planning it (an RRT-Connect approach) may take longer
+        # than the timeout, with the joint states waiting behind it.
+        quiet = time.monotonic() - max(self._last_joint_state, ex.started, ex.commanded)
         return quiet > float(self.get_parameter('joint_state_timeout').value)
 
     def _set_state(self, state: State, message: str, level: str = 'OK') -> None:
