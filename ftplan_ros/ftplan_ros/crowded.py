@@ -15,9 +15,10 @@ import numpy as np
 
 from .bench import random_task
 from .core import parse_scene
+from .core.distance_kernels import planar_link_clearances
 from .core.reference import Existence, decide_existence
 from .core.scene import Scene
-from .core.tolerant_set import link_clearances, preimage_samples
+from .core.tolerant_set import preimage_samples
 
 LINKS = (1.0, 1.0, 1.0)
 RADII = (0.12, 0.25)   # [m] disk radii
@@ -57,9 +58,10 @@ def _proved_task(rng: np.random.Generator, cells: int, name: str) -> tuple[np.nd
 def _disk_beside(rng: np.random.Generator, poses: np.ndarray, obstacles: list[dict],
                  start: np.ndarray, goal: np.ndarray) -> dict | None:
     """Draw a disk next to a link of a random obstacle-free pose, clear of base, start and goal."""
-    centers = np.array([ob['center'] for ob in obstacles], dtype=float).reshape(-1, 2)
+    centres = np.array([ob['center'] + [0.0] for ob in obstacles], dtype=float).reshape(-1, 3)
     radii = np.array([ob['radius'] for ob in obstacles], dtype=float)
-    free = poses[link_clearances(np.array(LINKS), 0.0, centers, radii, poses).min(axis=1) > 0]
+    free = poses[planar_link_clearances(np.array(LINKS), 0.0, centres, radii,
+                                        poses).min(axis=1) > 0]
     if len(free) == 0:
         return None
     theta = free[rng.integers(len(free))]

@@ -15,15 +15,16 @@ from scipy.sparse.csgraph import connected_components
 
 from ftplan_ros.core import CollisionChecker, InputError, load_scene, parse_scene, plan, recover
 from ftplan_ros.core.brute_force import recoverable_in_plane
+from ftplan_ros.core.distance_kernels import planar_link_clearances
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.robot import PlanarChain
 from ftplan_ros.core.scene import Obstacle
 from ftplan_ros.core.tolerant_set import (
     JointLattice,
     classify_cells,
+    disk_arrays,
     label_wrapped,
     layer_structure,
-    link_clearances,
     link_lever_arms,
     locked_goal_configurations,
     locked_goal_configurations_at,
@@ -178,25 +179,22 @@ def test_half_a_sub_slab_moves_the_tool_within_the_tolerance():
 
 # Clearances -----------------------------------------------------------------------------
 
-def disk_scene(radius=0.0, disks=((1.3, 0.8, 0.25), (-0.5, 1.5, 0.3), (0.9, -1.1, 0.2))):
+def disk_scene(radius=0.0, disks=((1.3, 0.8, 0.25), (-0.5, 1.5, 0.3), (0.9, -1.1, 0.2)),
+               height=0.0):
+    """A planar 3R arm among spheres whose centres lie `height` [m] off the arm's plane."""
     return parse_scene({
         'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0], 'link_radius': radius},
-        'obstacles': [{'type': 'sphere', 'center': [x, y], 'radius': r} for x, y, r in disks],
+        'obstacles': [{'type': 'sphere', 'center': [x, y, height], 'radius': r}
+                      for x, y, r in disks],
         'task': {'start': [2.0, 0.0], 'goal': [1.0, 0.0]}})
 
 
-def disk_arrays(scene, margin=0.0):
-    centers = np.array([ob.center[:2] for ob in scene.obstacles], dtype=float)
-    radii = np.array([ob.radius for ob in scene.obstacles], dtype=float) + margin
-    return centers, radii
-
-
-@pytest.mark.parametrize('radius', [0.0, 0.05])
-def test_link_clearances_are_the_checkers(radius):
-    scene = disk_scene(radius)
-    checker = CollisionChecker(scene.robot, scene.obstacles)
+@pytest.mark.parametrize('radius, height', [(0.0, 0.0), (0.05, 0.0), (0.05, 0.15)])
+def test_link_clearances_are_the_checkers(radius, height):
+    scene = disk_scene(radius, height=height)
+    checker = CollisionChecker(scene.robot, scene.obstacles, backend='fcl')  # posed frames
     thetas = np.random.default_rng(5).uniform(-np.pi, np.pi, (3000, 3))
-    mine = link_clearances(LINKS, radius, *disk_arrays(scene), thetas)
+    mine = planar_link_clearances(LINKS, radius, *disk_arrays(scene), thetas)
     assert np.allclose(mine, checker.clearance(thetas), atol=1e-9)
     assert (mine.min(axis=1) < 0).sum() > 100  # collisions among them
 

@@ -305,3 +305,56 @@ def pair_distances(poses: np.ndarray, kinds: np.ndarray, parameters: np.ndarray,
                             enough + capsules[a, 6]) - capsules[a, 6])
             out[n, q] = value
     return out
+
+
+# Planar chains among spheres: the exact tier 1 without frames ----------------------------
+
+@numba.njit(cache=True)
+def planar_joint_points(lengths, theta, points):
+    """Fill `points` (n+1, 2) [m] with the base, the joints and the tool of a planar chain."""
+    phi = 0.0
+    for k in range(lengths.shape[0]):
+        phi += theta[k]
+        points[k + 1, 0] = points[k, 0] + lengths[k] * np.cos(phi)
+        points[k + 1, 1] = points[k, 1] + lengths[k] * np.sin(phi)
+
+
+@numba.njit(cache=True)
+def segment_disk_clearance(a, b, centres, radii):
+    """Smallest distance [m] from segment a-b (2-D points in z = 0) to the spheres.
+
+    `centres` (P, 3) [m], `radii` (P,) [m]; negative inside one, +inf without spheres.
+    """
+    dx = b[0] - a[0]
+    dy = b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    best = np.inf
+    for p in range(centres.shape[0]):
+        ex = centres[p, 0] - a[0]
+        ey = centres[p, 1] - a[1]
+        t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
+        t = min(1.0, max(0.0, t))
+        fx = ex - t * dx
+        fy = ey - t * dy
+        d = np.sqrt(fx * fx + fy * fy + centres[p, 2] * centres[p, 2]) - radii[p]
+        if d < best:
+            best = d
+    return best
+
+
+@numba.njit(cache=True)
+def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
+    """Clearance (N, n) [m] of each link's capsule from the nearest sphere, exactly.
+
+    A planar chain of links `lengths` (n,) [m] and capsule radius `link_radius` [m], at
+    configurations `thetas` (N, n) [rad]; spheres of `centres` (P, 3) and `radii` (P,).
+    """
+    count, n = thetas.shape
+    out = np.empty((count, n))
+    points = np.zeros((n + 1, 2))
+    for q in range(count):
+        planar_joint_points(lengths, thetas[q], points)
+        for k in range(n):
+            out[q, k] = segment_disk_clearance(points[k], points[k + 1], centres,
+                                               radii) - link_radius
+    return out

@@ -47,6 +47,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from .distance_kernels import planar_joint_points, segment_disk_clearance
 from .errors import InputError
 from .robot import PlanarChain
 from .scene import Scene
@@ -62,6 +63,13 @@ def supports(scene: Scene) -> bool:
             and all(ob.shape == 'sphere' for ob in scene.obstacles))
 
 
+def disk_arrays(scene: Scene, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Return the scene's spheres as centres (P, 3) [m] and radii (P,) [m], grown by `margin`."""
+    centres = np.array([ob.center for ob in scene.obstacles], dtype=float).reshape(-1, 3)
+    radii = np.array([ob.radius for ob in scene.obstacles], dtype=float).reshape(-1) + margin
+    return centres, radii
+
+
 def link_lever_arms(lengths: np.ndarray) -> np.ndarray:
     """(n, n) R[k, a] = Σ_{m=a..k} ℓ_m [m]: how far any point of link k is from joint a.
 
@@ -73,52 +81,6 @@ def link_lever_arms(lengths: np.ndarray) -> np.ndarray:
         for a in range(k + 1):
             arms[k, a] = lengths[a:k + 1].sum()
     return arms
-
-
-@numba.njit(cache=True)
-def link_clearances(lengths, link_radius, centers, radii, thetas):
-    """Clearance (M, n) [m] of each link's capsule from the nearest disk, exactly.
-
-    `centers` (P, 2) and `radii` (P,) are the disks, `thetas` (M, n) the configurations.
-    """
-    count, n = thetas.shape
-    out = np.full((count, n), np.inf)
-    points = np.zeros((n + 1, 2))
-    for q in range(count):
-        _joint_points(lengths, thetas[q], points)
-        for k in range(n):
-            out[q, k] = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
-    return out
-
-
-@numba.njit(cache=True)
-def _joint_points(lengths, theta, points):
-    """Fill `points` (n+1, 2) [m] with the base, the joints and the tool."""
-    phi = 0.0
-    for k in range(lengths.shape[0]):
-        phi += theta[k]
-        points[k + 1, 0] = points[k, 0] + lengths[k] * np.cos(phi)
-        points[k + 1, 1] = points[k, 1] + lengths[k] * np.sin(phi)
-
-
-@numba.njit(cache=True)
-def _segment_clearance(a, b, centers, radii):
-    """Smallest distance [m] from segment a-b to the disks (negative inside one)."""
-    dx = b[0] - a[0]
-    dy = b[1] - a[1]
-    length2 = dx * dx + dy * dy
-    best = np.inf
-    for p in range(centers.shape[0]):
-        ex = centers[p, 0] - a[0]
-        ey = centers[p, 1] - a[1]
-        t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
-        t = min(1.0, max(0.0, t))
-        fx = ex - t * dx
-        fy = ey - t * dy
-        d = np.sqrt(fx * fx + fy * fy) - radii[p]
-        if d < best:
-            best = d
-    return best
 
 
 @numba.njit(cache=True)
@@ -140,7 +102,7 @@ def _link_motion_bound(points, arms, half, k):
 
 
 @numba.njit(cache=True)
-def _classify_level(lengths, link_radius, centers, radii, arms, lower, step, size, index):
+def _classify_level(lengths, link_radius, centres, radii, arms, lower, step, size, index):
     """Status (c,) of cells `index` (c, n) of `size` fine cells: 0 collides, 1 free, 2 unsure.
 
     Inside a cell of half widths h, a point of link k moves by at most
@@ -156,12 +118,13 @@ def _classify_level(lengths, link_radius, centers, radii, arms, lower, step, siz
     for c in range(count):
         for a in range(n):
             theta[a] = lower[a] + (index[c, a] + 0.5) * size * step[a]
-        _joint_points(lengths, theta, points)
+        planar_joint_points(lengths, theta, points)
         free = True
         collides = False
         for k in range(n):
             bound = _link_motion_bound(points, arms, half, k)
-            clearance = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
+            clearance = (segment_disk_clearance(points[k], points[k + 1], centres, radii)
+                         - link_radius)
             if clearance <= bound:
                 free = False
             if clearance < -bound:
@@ -171,7 +134,7 @@ def _classify_level(lengths, link_radius, centers, radii, arms, lower, step, siz
 
 
 @numba.njit(cache=True)
-def triangle_free(lengths, link_radius, centers, radii, arms, corners, depth):
+def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
     """Whether every configuration of the triangle `corners` (3, n) [rad] is free.
 
     The clearance at the centroid must beat the lever bound of `_classify_level` over the
@@ -194,11 +157,12 @@ def triangle_free(lengths, link_radius, centers, radii, arms, corners, depth):
             centre[a] = (tri[0, a] + tri[1, a] + tri[2, a]) / 3.0
             half[a] = max(abs(tri[0, a] - centre[a]),
                           max(abs(tri[1, a] - centre[a]), abs(tri[2, a] - centre[a])))
-        _joint_points(lengths, centre, points)
+        planar_joint_points(lengths, centre, points)
         free = True
         for k in range(n):
             bound = _link_motion_bound(points, arms, half, k)
-            clearance = _segment_clearance(points[k], points[k + 1], centers, radii) - link_radius
+            clearance = (segment_disk_clearance(points[k], points[k + 1], centres, radii)
+                         - link_radius)
             if clearance <= 0.0:
                 return False
             if clearance <= bound:
@@ -322,8 +286,7 @@ def classify_cells(scene: Scene, cells: int, coarsest: int = 16,
         raise ValueError(f'cells ({cells}) must be {coarsest} times a power of two')
     lengths = np.asarray(robot.link_lengths, dtype=float)
     arms = link_lever_arms(lengths)
-    centers = np.array([ob.center[:2] for ob in scene.obstacles], dtype=float).reshape(-1, 2)
-    radii = np.array([ob.radius for ob in scene.obstacles], dtype=float) + margin
+    centres, radii = disk_arrays(scene, margin)
     certified = np.zeros((cells,) * 3, dtype=bool)
     possible = np.zeros((cells,) * 3, dtype=bool)
     index = np.stack(np.meshgrid(*(np.arange(coarsest),) * 3, indexing='ij'), -1).reshape(-1, 3)
@@ -331,7 +294,7 @@ def classify_cells(scene: Scene, cells: int, coarsest: int = 16,
     corners = np.stack(np.meshgrid(*([0, 1],) * 3, indexing='ij'), -1).reshape(-1, 3)
     for level in range(levels + 1):
         size = cells // (coarsest * 2 ** level)
-        status = _classify_level(lengths, float(robot.link_radius), centers, radii, arms,
+        status = _classify_level(lengths, float(robot.link_radius), centres, radii, arms,
                                  lattice.lower, lattice.step, size, index)
         evaluations += len(index)
         free, unsure = index[status == 1], index[status == 2]

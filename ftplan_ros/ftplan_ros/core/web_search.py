@@ -53,6 +53,7 @@ from .result import PlanResult
 from .scene import Scene
 from .tolerant_set import (
     TolerantSet,
+    disk_arrays,
     label_wrapped,
     link_lever_arms,
     preimage_samples,
@@ -578,13 +579,11 @@ class _TriangleCheck:
         robot = scene.robot
         self.lengths = np.asarray(robot.link_lengths, dtype=float)
         self.radius = float(robot.link_radius)
-        self.centers = np.array([ob.center[:2] for ob in scene.obstacles],
-                                dtype=float).reshape(-1, 2)
-        self.radii = np.array([ob.radius for ob in scene.obstacles], dtype=float) + margin
+        self.centres, self.radii = disk_arrays(scene, margin)
         self.arms = link_lever_arms(self.lengths)
 
     def __call__(self, corners: np.ndarray) -> bool:
-        return bool(triangle_free(self.lengths, self.radius, self.centers, self.radii,
+        return bool(triangle_free(self.lengths, self.radius, self.centres, self.radii,
                                   self.arms, np.ascontiguousarray(corners, dtype=float), 6))
 
 
