@@ -251,10 +251,12 @@ def sample_cells(lattice, cells, per_cell, rng):
     return (lattice.lower + (cells[:, None, :] + offsets) * lattice.step).reshape(-1, 3)
 
 
-@pytest.mark.parametrize('radius, margin', [(0.0, 0.0), (0.05, 0.0), (0.0, 0.08)])
-def test_cell_classes_hold_for_every_configuration_sampled(radius, margin):
-    scene = disk_scene(radius, disks=((1.3, 0.8, 0.45), (-0.5, 1.5, 0.3), (0.9, -1.1, 0.4)))
-    checker = CollisionChecker(scene.robot, scene.obstacles)
+@pytest.mark.parametrize('radius, margin, height', [(0.0, 0.0, 0.0), (0.05, 0.0, 0.0),
+                                                    (0.0, 0.08, 0.0), (0.05, 0.0, 0.2)])
+def test_cell_classes_hold_for_every_configuration_sampled(radius, margin, height):
+    scene = disk_scene(radius, disks=((1.3, 0.8, 0.45), (-0.5, 1.5, 0.3), (0.9, -1.1, 0.4)),
+                       height=height)
+    checker = CollisionChecker(scene.robot, scene.obstacles, backend='fcl')  # posed frames
     classes = classify_cells(scene, 64, margin=margin)
     rng = np.random.default_rng(8)
     certified = np.argwhere(classes.certified)

@@ -88,7 +88,7 @@ def _link_motion_bound(points, arms, half, k):
     """How far [m] a point of link k can move in a box of half widths `half` (n,) [rad].
 
     `points` (n+1, 2) are the joints at the box's centre; the bound is
-    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), plus 1e-9 m of rounding (see `_classify_level`).
+    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), plus 1e-9 m of rounding (see `_link_status`).
     """
     stretch = 0.0
     for b in range(half.shape[0]):
@@ -102,42 +102,119 @@ def _link_motion_bound(points, arms, half, k):
 
 
 @numba.njit(cache=True)
-def _classify_level(lengths, link_radius, centres, radii, arms, lower, step, size, index):
-    """Status (c,) of cells `index` (c, n) of `size` fine cells: 0 collides, 1 free, 2 unsure.
+def _link_status(lengths, link_radius, centres, radii, arms, theta, half, k, points):
+    """Status of link k over the cell of centre `theta` (n,) and half widths `half` (n,).
 
-    Inside a cell of half widths h, a point of link k moves by at most
-    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), d_ka the farthest end of link k from joint a at the
-    centre: the first term is its lever arm there, the second how much the cell can
-    stretch it.
+    0: every configuration of the cell collides; 1: every one is free; 2: unsure. Inside
+    the cell a point of link k moves by at most Σ_a h_a (d_ka + Σ_b R[k, b] h_b), d_ka the
+    farthest end of link k from joint a at the centre: the first term is its lever arm
+    there, the second how much the cell can stretch it. Only joints 0..k count, so the
+    status depends on the cell's extent in those joints alone. `points` (n+1, 2) is
+    scratch space.
     """
-    count, n = index.shape
-    status = np.empty(count, dtype=np.int8)
+    planar_joint_points(lengths, theta, points)
+    bound = _link_motion_bound(points, arms, half, k)
+    clearance = segment_disk_clearance(points[k], points[k + 1], centres, radii) - link_radius
+    if clearance < -bound:
+        return 0
+    return 1 if clearance > bound else 2
+
+
+@numba.njit(cache=True)
+def _fine_link_tables(lengths, link_radius, centres, radii, arms, lower, step, cells):
+    """Statuses of links 1 (N,) and 2 (N, N) over the fine cells of the joints that move them."""
+    n = lengths.shape[0]
+    points = np.zeros((n + 1, 2))
+    theta = np.zeros(n)
+    half = 0.5 * step
+    first = np.empty(cells, dtype=np.int8)
+    second = np.empty((cells, cells), dtype=np.int8)
+    for i in range(cells):
+        theta[0] = lower[0] + (i + 0.5) * step[0]
+        first[i] = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 0,
+                                points)
+        for j in range(cells):
+            theta[1] = lower[1] + (j + 0.5) * step[1]
+            second[i, j] = _link_status(lengths, link_radius, centres, radii, arms, theta,
+                                        half, 1, points)
+    return first, second
+
+
+@numba.njit(cache=True)
+def _classify_octree(lengths, link_radius, centres, radii, arms, lower, step, coarsest,
+                     levels, first, second, certified, possible):
+    """Fill `certified` and `possible` (N, N, N) coarse to fine; return the cells evaluated.
+
+    Cells of level L are N / (coarsest · 2^L) fine cells wide; `first[L]` (N,) and
+    `second[L]` (N, N) hold the statuses of links 1 and 2 over the cells of level L. A
+    cell where either surely collides is dropped; otherwise link 3 is measured at its
+    centre, and a cell still unsure is split in eight, down to the fine cells.
+    """
+    cells = certified.shape[0]
+    n = lengths.shape[0]
+    depth = coarsest ** 3 + 7 * levels + 1
+    stack = np.empty((depth, 4), dtype=np.int64)
+    top = 0
+    for i in range(coarsest):
+        for j in range(coarsest):
+            for k in range(coarsest):
+                stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = 0, i, j, k
+                top += 1
     points = np.zeros((n + 1, 2))
     theta = np.empty(n)
-    half = 0.5 * size * step
-    for c in range(count):
+    half = np.empty(n)
+    evaluated = 0
+    while top > 0:
+        top -= 1
+        level, i, j, k = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
+        one, two = first[level, i], second[level, i, j]
+        if one == 0 or two == 0:
+            continue
+        size = cells // (coarsest << level)
+        theta[0] = lower[0] + (i + 0.5) * size * step[0]
+        theta[1] = lower[1] + (j + 0.5) * size * step[1]
+        theta[2] = lower[2] + (k + 0.5) * size * step[2]
         for a in range(n):
-            theta[a] = lower[a] + (index[c, a] + 0.5) * size * step[a]
-        planar_joint_points(lengths, theta, points)
-        free = True
-        collides = False
-        for k in range(n):
-            bound = _link_motion_bound(points, arms, half, k)
-            clearance = (segment_disk_clearance(points[k], points[k + 1], centres, radii)
-                         - link_radius)
-            if clearance <= bound:
-                free = False
-            if clearance < -bound:
-                collides = True
-        status[c] = 0 if collides else 1 if free else 2
-    return status
+            half[a] = 0.5 * size * step[a]
+        three = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 2,
+                             points)
+        evaluated += 1
+        if three == 0:
+            continue
+        free = one == 1 and two == 1 and three == 1
+        if free or level == levels:
+            block = (slice(i * size, (i + 1) * size), slice(j * size, (j + 1) * size),
+                     slice(k * size, (k + 1) * size))
+            possible[block] = True
+            if free:
+                certified[block] = True
+            continue
+        for child in range(8):
+            stack[top, 0] = level + 1
+            stack[top, 1] = 2 * i + (child >> 2)
+            stack[top, 2] = 2 * j + ((child >> 1) & 1)
+            stack[top, 3] = 2 * k + (child & 1)
+            top += 1
+    return evaluated
+
+
+def _coarser(status: np.ndarray, factor: int) -> np.ndarray:
+    """Statuses (int8, any dimension) over cells `factor` times wider per axis.
+
+    A wide cell is free (1) or collides (0) when all its fine cells are; else unsure (2).
+    """
+    shape = [size for width in status.shape for size in (width // factor, factor)]
+    blocks = status.reshape(shape)
+    axes = tuple(range(1, 2 * status.ndim, 2))
+    return np.where((blocks == 1).all(axis=axes), 1,
+                    np.where((blocks == 0).all(axis=axes), 0, 2)).astype(np.int8)
 
 
 @numba.njit(cache=True)
 def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
     """Whether every configuration of the triangle `corners` (3, n) [rad] is free.
 
-    The clearance at the centroid must beat the lever bound of `_classify_level` over the
+    The clearance at the centroid must beat the lever bound of `_link_status` over the
     corners' spread; otherwise the triangle is split in four, `depth` times at most.
     """
     n = corners.shape[1]
@@ -186,19 +263,6 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
             levels[top] = level + 1
             top += 1
     return True
-
-
-@numba.njit(cache=True)
-def _fill_blocks(target, cells, size, value):
-    """Set every fine cell of the coarse cells (c, 3) of `size` fine cells per edge."""
-    for c in range(cells.shape[0]):
-        i0 = cells[c, 0] * size
-        j0 = cells[c, 1] * size
-        k0 = cells[c, 2] * size
-        for i in range(i0, i0 + size):
-            for j in range(j0, j0 + size):
-                for k in range(k0, k0 + size):
-                    target[i, j, k] = value
 
 
 @numba.njit(cache=True)
@@ -287,23 +351,20 @@ def classify_cells(scene: Scene, cells: int, coarsest: int = 16,
     lengths = np.asarray(robot.link_lengths, dtype=float)
     arms = link_lever_arms(lengths)
     centres, radii = disk_arrays(scene, margin)
+    link_radius = float(robot.link_radius)
+    fine = _fine_link_tables(lengths, link_radius, centres, radii, arms, lattice.lower,
+                             lattice.step, cells)
+    tables = [np.full((levels + 1,) + table.shape, 2, dtype=np.int8) for table in fine]
+    for level in range(levels + 1):
+        factor = cells // (coarsest * 2 ** level)
+        for table, status in zip(tables, fine, strict=True):
+            coarse = _coarser(status, factor)
+            table[(level,) + tuple(slice(0, width) for width in coarse.shape)] = coarse
     certified = np.zeros((cells,) * 3, dtype=bool)
     possible = np.zeros((cells,) * 3, dtype=bool)
-    index = np.stack(np.meshgrid(*(np.arange(coarsest),) * 3, indexing='ij'), -1).reshape(-1, 3)
-    evaluations = 0
-    corners = np.stack(np.meshgrid(*([0, 1],) * 3, indexing='ij'), -1).reshape(-1, 3)
-    for level in range(levels + 1):
-        size = cells // (coarsest * 2 ** level)
-        status = _classify_level(lengths, float(robot.link_radius), centres, radii, arms,
-                                 lattice.lower, lattice.step, size, index)
-        evaluations += len(index)
-        free, unsure = index[status == 1], index[status == 2]
-        _fill_blocks(certified, free, size, True)
-        _fill_blocks(possible, free, size, True)
-        if level == levels:
-            _fill_blocks(possible, unsure, size, True)
-            break
-        index = (2 * unsure[:, None, :] + corners[None]).reshape(-1, 3)
+    evaluations = cells + cells * cells + _classify_octree(
+        lengths, link_radius, centres, radii, arms, lattice.lower, lattice.step, coarsest,
+        levels, *tables, certified, possible)
     return CellClasses(lattice, certified, possible, evaluations)
 
 
@@ -416,19 +477,17 @@ class TolerantSet:
     """G on a joint grid (see the module docstring) for a scene's task.
 
     `certified[i]` (N, N, N) marks cells every configuration of which can escape with
-    joint i locked (under-approximation); `liberal[i]` the cells that may hold such a
-    configuration (over-approximation). `layer_labels[i]` numbers the components of the
-    certified free cells of each θ_i-layer; `goal_points[i]` (g, 3) are the exact goal
+    joint i locked (under-approximation); `goal_points[i]` (g, 3) are the exact goal
     configurations found in certified-escaping components, solved at the middle of
-    sub-slab `goal_slabs[i]` (g,) (layer · m + k, m = `sub_slabs[i]`).
+    sub-slab `goal_slabs[i]` (g,) (layer · m + k, m = `sub_slabs[i]`). The cells that may
+    hold such a configuration (`liberal`, the over-approximation) are computed on first
+    use: only a proof that no plan exists needs them.
     """
 
     scene: Scene
     classes: CellClasses
     joints: tuple[int, ...]
     certified: dict
-    liberal: dict
-    layer_labels: dict
     goal_points: dict
     goal_slabs: dict
     sub_slabs: dict
@@ -447,12 +506,39 @@ class TolerantSet:
         return out
 
     @cached_property
+    def liberal(self) -> dict:
+        """{joint i: (N, N, N) bool}: cells that may escape with joint i locked.
+
+        A cell may escape when its layer component of possibly free cells holds a cell
+        that may put the tool within the goal tolerance (`escape_liberal`).
+        """
+        classes, lattice, task = self.classes, self.lattice, self.scene.task
+        possibly_goal = lattice.tool_near(self.scene.robot, np.asarray(task.goal, dtype=float),
+                                          task.goal_tolerance) & classes.possible
+        out = {}
+        for joint in self.joints:
+            labels = label_wrapped(classes.possible, layer_structure(joint),
+                                   _other_periodic(lattice, joint))
+            escape = np.zeros(labels.max() + 1, dtype=bool)
+            escape[np.unique(labels[possibly_goal])] = True
+            escape[0] = False
+            out[joint] = escape[labels]
+        return out
+
+    @cached_property
     def liberal_all(self) -> np.ndarray:
         """(N, N, N) bool: cells that may meet G (over-approximation)."""
         out = self.classes.possible.copy()
         for joint in self.joints:
             out &= self.liberal[joint]
         return out
+
+
+def _other_periodic(lattice: JointLattice, joint: int) -> np.ndarray:
+    """(3,) bool: the periodic axes a θ_joint-layer wraps round (not the layer's own)."""
+    others = lattice.periodic.copy()
+    others[joint] = False
+    return others
 
 
 def sub_slab_count(robot: PlanarChain, step: float, joint: int, tolerance: float) -> int:
@@ -463,7 +549,7 @@ def sub_slab_count(robot: PlanarChain, step: float, joint: int, tolerance: float
 
 def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0.0,
                  ) -> TolerantSet:
-    """Compute G from inside and outside on N = `cells` cells per joint for scene.task.
+    """Compute G from inside on N = `cells` cells per joint for scene.task (the outside on use).
 
     Free means clear of the disks by more than `margin` [m].
     """
@@ -474,20 +560,11 @@ def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0
     lattice = classes.lattice
     lengths = np.asarray(robot.link_lengths, dtype=float)
     x_goal = np.asarray(task.goal, dtype=float)
-    possibly_goal = lattice.tool_near(robot, x_goal, task.goal_tolerance)
-    certified, liberal, labels_of, goals_of, slabs_of, subs = {}, {}, {}, {}, {}, {}
+    certified, goals_of, slabs_of, subs = {}, {}, {}, {}
     for joint in scene.tolerated_joints:
-        structure = layer_structure(joint)
-        others = lattice.periodic.copy()
-        others[joint] = False
-        # Outside: components of possibly free cells holding a possible goal cell.
-        labels = label_wrapped(classes.possible, structure, others)
-        escape = np.zeros(labels.max() + 1, dtype=bool)
-        escape[np.unique(labels[possibly_goal & classes.possible])] = True
-        escape[0] = False
-        liberal[joint] = escape[labels]
-        # Inside: components of certified free cells covering every sub-slab with a goal.
-        labels = label_wrapped(classes.certified, structure, others)
+        # Components of certified free cells covering every sub-slab with a goal.
+        labels = label_wrapped(classes.certified, layer_structure(joint),
+                               _other_periodic(lattice, joint))
         m = sub_slab_count(robot, lattice.step[joint], joint, task.goal_tolerance)
         if m > 62:
             raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
@@ -503,12 +580,11 @@ def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0
         full = coverage == (1 << m) - 1
         full[0] = False
         certified[joint] = full[labels]
-        labels_of[joint] = labels
         goals_of[joint] = points[full[label]]
         slabs_of[joint] = slab[full[label]]
         subs[joint] = m
-    return TolerantSet(scene, classes, tuple(scene.tolerated_joints), certified, liberal,
-                       labels_of, goals_of, slabs_of, subs)
+    return TolerantSet(scene, classes, tuple(scene.tolerated_joints), certified, goals_of,
+                       slabs_of, subs)
 
 
 def locked_goal_configurations_at(lengths: np.ndarray, x: np.ndarray, joint: int,

@@ -170,10 +170,11 @@ class WebSearch:
         if found is None:
             return None, 'no path through the certified failure-tolerant cells'
         gamma = _split_at_layers(_nominal_path(grid, *found), grid, _LAYERS_PER_STRIP)
+        fresh: dict = {}  # the sheets of segments the rounds leave as they were
         for _ in range(_MOST_ROUNDS):
             sheets, splits = [], {}
             for joint in grid.joints:
-                builder = _SheetBuilder(grid, gamma, joint, self.margin)
+                builder = _SheetBuilder(grid, gamma, joint, self.margin, fresh)
                 blocks = builder.build()
                 if blocks is None and not builder.splits:
                     return None, f'no recovery sheet for joint {joint + 1}'
@@ -335,10 +336,13 @@ class _SheetBuilder:
     """Recovery columns of one joint, as sheets (lists of columns (L, 3) [rad]).
 
     Where a strip cannot be built, `splits` maps its segment to the fraction at which a
-    waypoint would help (at a sub-slab or layer boundary, else halfway).
+    waypoint would help (at a sub-slab or layer boundary, else halfway). `fresh` keeps
+    each new sheet's outcome by the joint and the segment's two waypoints, for the
+    builders of later rounds, whose paths differ only where waypoints were added.
     """
 
-    def __init__(self, grid: TolerantSet, gamma: np.ndarray, joint: int, margin: float = 0.0):
+    def __init__(self, grid: TolerantSet, gamma: np.ndarray, joint: int, margin: float = 0.0,
+                 fresh: dict | None = None):
         self.grid = grid
         self.lattice = grid.lattice
         self.gamma = gamma
@@ -357,6 +361,7 @@ class _SheetBuilder:
         self.free = _TriangleCheck(grid.scene, margin)
         self.splits: dict[int, float] = {}
         self.masks: dict[tuple[int, int], np.ndarray] = {}
+        self.fresh = {} if fresh is None else fresh
 
     def build(self) -> list[list[np.ndarray]] | None:
         """Sheets from the last waypoint back to θ_s, returned in order.
@@ -416,6 +421,17 @@ class _SheetBuilder:
         return _triangle_free(mask, offsets[0], offsets[1], offsets[2], self.periodic2)
 
     def _fresh(self, j: int) -> dict | None:
+        """Start a new sheet of the strip (j, j+1), or ask for a split (`_new_sheet`)."""
+        key = (self.joint, self.gamma[j].tobytes(), self.gamma[j + 1].tobytes())
+        if key not in self.fresh:
+            block = self._new_sheet(j)
+            self.fresh[key] = (block, self.splits.get(j))
+        block, split = self.fresh[key]
+        if split is not None:
+            self.splits[j] = split
+        return None if block is None else dict(block, j0=j, j1=j + 1)
+
+    def _new_sheet(self, j: int) -> dict | None:
         """Start a new sheet of the strip (j, j+1): a hub, a route from it to goals, two goals."""
         mask = self._strip_mask(j)
         levels = self._levels(j)
@@ -550,10 +566,10 @@ class _SheetBuilder:
         Also returns the cells (c, 2) the cut route passes through.
         """
         centres = self.lower2 + (path + 0.5) * self.step2
-        lifted = [anchor + _step(centres[0] - anchor, self.periodic2)]
-        for centre in centres[1:]:
-            lifted.append(lifted[-1] + _step(centre - lifted[-1], self.periodic2))
-        return _shortcut(np.array(lifted), mask, self.lower2, self.step2, self.periodic2)
+        first = anchor + _step(centres[0] - anchor, self.periodic2)
+        steps = _step(np.diff(centres, axis=0), self.periodic2)
+        lifted = first + np.vstack([np.zeros((1, 2)), np.cumsum(steps, axis=0)])
+        return _shortcut(lifted, mask, self.lower2, self.step2, self.periodic2)
 
     def _columns(self, block: dict) -> list[np.ndarray]:
         """Return the columns (L, 3) of a block: γ(j), the hub and route at level v_j, the goal."""
