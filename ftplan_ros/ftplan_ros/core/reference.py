@@ -93,7 +93,7 @@ def proves_no(grid: TolerantSet) -> bool:
     lattice = grid.lattice
     robot, task = grid.scene.robot, grid.scene.task
     start = lattice.tool_near(robot, np.asarray(task.start, dtype=float))
-    goal = lattice.tool_near(robot, np.asarray(task.goal, dtype=float), task.goal_tolerance)
+    goal = grid.near_goal
     labels = label_wrapped(outside, FULL, lattice.periodic)
     shared = np.intersect1d(labels[start & outside], labels[goal & outside])
     return not shared[shared > 0].size

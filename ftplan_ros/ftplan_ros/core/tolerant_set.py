@@ -269,16 +269,19 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
 def _tool_near(lengths, lower, step, cells, x, reach):
     """(N, N, N) bool: cells whose centre puts the tool within `reach` [m] of x."""
     out = np.zeros((cells, cells, cells), dtype=np.bool_)
+    # The last link's angle is a + b + c: its cosine and sine by the sum formulas.
+    c = lower[2] + (np.arange(cells) + 0.5) * step[2]
+    cos_c, sin_c = np.cos(c), np.sin(c)
     for i in range(cells):
         a = lower[0] + (i + 0.5) * step[0]
         for j in range(cells):
             b = a + lower[1] + (j + 0.5) * step[1]
-            px = lengths[0] * np.cos(a) + lengths[1] * np.cos(b)
-            py = lengths[0] * np.sin(a) + lengths[1] * np.sin(b)
+            px = lengths[0] * np.cos(a) + lengths[1] * np.cos(b) - x[0]
+            py = lengths[0] * np.sin(a) + lengths[1] * np.sin(b) - x[1]
+            cos_b, sin_b = np.cos(b), np.sin(b)
             for k in range(cells):
-                c = b + lower[2] + (k + 0.5) * step[2]
-                dx = px + lengths[2] * np.cos(c) - x[0]
-                dy = py + lengths[2] * np.sin(c) - x[1]
+                dx = px + lengths[2] * (cos_b * cos_c[k] - sin_b * sin_c[k])
+                dy = py + lengths[2] * (sin_b * cos_c[k] + cos_b * sin_c[k])
                 out[i, j, k] = dx * dx + dy * dy <= reach * reach
     return out
 
@@ -462,14 +465,28 @@ def locked_goal_configurations(lengths: np.ndarray, x: np.ndarray, joint: int,
 
 
 def preimage_samples(lengths: np.ndarray, x: np.ndarray, count: int) -> np.ndarray:
-    """Exact points (s, 3) [rad] of the pre-image of x: `count` angles of the last link."""
+    """Exact points (s, 3) [rad] of the pre-image of x: `count` angles of the last link.
+
+    For each angle, the wrist's `two_link_solutions` in their order there.
+    """
     l1, l2, l3 = (float(v) for v in lengths)
-    out = []
-    for phi in np.linspace(-np.pi, np.pi, count, endpoint=False):
-        wrist = np.asarray(x, dtype=float) - l3 * np.array([np.cos(phi), np.sin(phi)])
-        for first, second in two_link_solutions(l1, l2, wrist):
-            out.append((first, second, phi - first - second))
-    return np.array(out, dtype=float).reshape(-1, 3)
+    if l1 <= 0.0 or l2 <= 0.0:
+        return np.empty((0, 3))
+    phi = np.linspace(-np.pi, np.pi, count, endpoint=False)
+    wrists = np.asarray(x, dtype=float)[:2] - l3 * np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    cos_elbow = (np.sum(wrists ** 2, axis=1) - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
+    reached = np.abs(cos_elbow) <= 1.0
+    phi, wrists = phi[reached], wrists[reached]
+    elbow = np.arccos(cos_elbow[reached])
+    # The order of the set {elbow, -elbow} there, and a single solution at a straight elbow.
+    sign = np.array([1.0 if next(iter({e, -e})) == e else -1.0 for e in elbow.tolist()])
+    elbows = np.stack([sign * elbow, -sign * elbow], axis=1)
+    keep = np.stack([np.ones(len(elbow), dtype=bool), elbow != 0.0], axis=1)
+    row = np.broadcast_to(np.arange(len(elbow))[:, None], keep.shape)[keep]
+    second = elbows[keep]
+    first = np.arctan2(wrists[row, 1], wrists[row, 0]) - np.arctan2(
+        l2 * np.sin(second), l1 + l2 * np.cos(second))
+    return np.stack([first, second, phi[row] - first - second], axis=1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -506,15 +523,21 @@ class TolerantSet:
         return out
 
     @cached_property
+    def near_goal(self) -> np.ndarray:
+        """(N, N, N) bool: cells that may put the tool within the goal tolerance."""
+        task = self.scene.task
+        return self.lattice.tool_near(self.scene.robot, np.asarray(task.goal, dtype=float),
+                                      task.goal_tolerance)
+
+    @cached_property
     def liberal(self) -> dict:
         """{joint i: (N, N, N) bool}: cells that may escape with joint i locked.
 
         A cell may escape when its layer component of possibly free cells holds a cell
         that may put the tool within the goal tolerance (`escape_liberal`).
         """
-        classes, lattice, task = self.classes, self.lattice, self.scene.task
-        possibly_goal = lattice.tool_near(self.scene.robot, np.asarray(task.goal, dtype=float),
-                                          task.goal_tolerance) & classes.possible
+        classes, lattice = self.classes, self.lattice
+        possibly_goal = self.near_goal & classes.possible
         out = {}
         for joint in self.joints:
             labels = label_wrapped(classes.possible, layer_structure(joint),

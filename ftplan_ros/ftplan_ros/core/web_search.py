@@ -48,13 +48,12 @@ from .collision import CollisionChecker
 from .failure_surface import FailureSurface
 from .manifolds import project_to_preimage
 from .options import PlannerOptions
-from .reference import FULL, proves_no
+from .reference import proves_no
 from .result import PlanResult
 from .scene import Scene
 from .tolerant_set import (
     TolerantSet,
     disk_arrays,
-    label_wrapped,
     link_lever_arms,
     preimage_samples,
     supports,
@@ -219,11 +218,6 @@ def _nominal_cells(grid: TolerantSet, start_configuration: np.ndarray | None,
     start_ok = inside[tuple(start_cells.T)]
     goal_ok = inside[tuple(goal_cells.T)]
     if not start_ok.any() or not goal_ok.any():
-        return None
-    labels = label_wrapped(inside, FULL, lattice.periodic)
-    shared = np.intersect1d(labels[tuple(start_cells[start_ok].T)],
-                            labels[tuple(goal_cells[goal_ok].T)])
-    if not shared.size:
         return None
     target = np.zeros(inside.shape, dtype=np.bool_)
     target[tuple(goal_cells[goal_ok].T)] = True
