@@ -113,11 +113,35 @@ def _link_status(lengths, link_radius, centres, radii, arms, theta, half, k, poi
     scratch space.
     """
     planar_joint_points(lengths, theta, points)
-    bound = _link_motion_bound(points, arms, half, k)
-    clearance = segment_disk_clearance(points[k], points[k + 1], centres, radii) - link_radius
-    if clearance < -bound:
-        return 0
-    return 1 if clearance > bound else 2
+    return _segment_status(points[k], points[k + 1], centres, radii, link_radius,
+                           _link_motion_bound(points, arms, half, k))
+
+
+@numba.njit(cache=True)
+def _segment_status(a, b, centres, radii, link_radius, bound):
+    """0 when the capsule a-b's clearance is below -bound, 1 when above bound, else 2.
+
+    `segment_disk_clearance` decided on squared distances (no square roots).
+    """
+    dx = b[0] - a[0]
+    dy = b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    status = 1
+    for p in range(centres.shape[0]):
+        ex = centres[p, 0] - a[0]
+        ey = centres[p, 1] - a[1]
+        t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
+        t = min(1.0, max(0.0, t))
+        fx = ex - t * dx
+        fy = ey - t * dy
+        gap2 = fx * fx + fy * fy + centres[p, 2] * centres[p, 2]
+        near = radii[p] + link_radius - bound
+        if near > 0.0 and gap2 < near * near:
+            return 0
+        far = radii[p] + link_radius + bound
+        if gap2 <= far * far:
+            status = 2
+    return status
 
 
 @numba.njit(cache=True)
@@ -160,8 +184,22 @@ def _classify_octree(lengths, link_radius, centres, radii, arms, lower, step, co
             for k in range(coarsest):
                 stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = 0, i, j, k
                 top += 1
+    # Joints 1 and 2 at the centre of every (θ_1, θ_2) cell of every level: the base,
+    # joint 2, joint 3 (x, y) and θ_1 + θ_2, as `planar_joint_points` computes them.
+    elbows = np.zeros((levels + 1, cells, cells, 7))
+    for level in range(levels + 1):
+        size = cells // (coarsest << level)
+        for i in range(coarsest << level):
+            a = lower[0] + (i + 0.5) * size * step[0]
+            for j in range(coarsest << level):
+                phi = a + (lower[1] + (j + 0.5) * size * step[1])
+                row = elbows[level, i, j]
+                row[2] = lengths[0] * np.cos(a)
+                row[3] = lengths[0] * np.sin(a)
+                row[4] = row[2] + lengths[1] * np.cos(phi)
+                row[5] = row[3] + lengths[1] * np.sin(phi)
+                row[6] = phi
     points = np.zeros((n + 1, 2))
-    theta = np.empty(n)
     half = np.empty(n)
     evaluated = 0
     while top > 0:
@@ -171,23 +209,26 @@ def _classify_octree(lengths, link_radius, centres, radii, arms, lower, step, co
         if one == 0 or two == 0:
             continue
         size = cells // (coarsest << level)
-        theta[0] = lower[0] + (i + 0.5) * size * step[0]
-        theta[1] = lower[1] + (j + 0.5) * size * step[1]
-        theta[2] = lower[2] + (k + 0.5) * size * step[2]
+        row = elbows[level, i, j]
+        phi = row[6] + (lower[2] + (k + 0.5) * size * step[2])
+        for p in range(3):
+            points[p, 0], points[p, 1] = row[2 * p], row[2 * p + 1]
+        points[3, 0] = points[2, 0] + lengths[2] * np.cos(phi)
+        points[3, 1] = points[2, 1] + lengths[2] * np.sin(phi)
         for a in range(n):
             half[a] = 0.5 * size * step[a]
-        three = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 2,
-                             points)
+        three = _segment_status(points[2], points[3], centres, radii, link_radius,
+                                _link_motion_bound(points, arms, half, 2))
         evaluated += 1
         if three == 0:
             continue
         free = one == 1 and two == 1 and three == 1
         if free or level == levels:
-            block = (slice(i * size, (i + 1) * size), slice(j * size, (j + 1) * size),
-                     slice(k * size, (k + 1) * size))
-            possible[block] = True
-            if free:
-                certified[block] = True
+            for a in range(i * size, (i + 1) * size):
+                for b in range(j * size, (j + 1) * size):
+                    for c in range(k * size, (k + 1) * size):
+                        possible[a, b, c] = True
+                        certified[a, b, c] = free
             continue
         for child in range(8):
             stack[top, 0] = level + 1
