@@ -169,11 +169,11 @@ class WebSearch:
         if found is None:
             return None, 'no path through the certified failure-tolerant cells'
         gamma = _split_at_layers(_nominal_path(grid, *found), grid, _LAYERS_PER_STRIP)
-        fresh: dict = {}  # the sheets of segments the rounds leave as they were
+        memo: dict = {}  # what the rounds find on the segments they leave as they were
         for _ in range(_MOST_ROUNDS):
             sheets, splits = [], {}
             for joint in grid.joints:
-                builder = _SheetBuilder(grid, gamma, joint, self.margin, fresh)
+                builder = _SheetBuilder(grid, gamma, joint, self.margin, memo)
                 blocks = builder.build()
                 if blocks is None and not builder.splits:
                     return None, f'no recovery sheet for joint {joint + 1}'
@@ -330,13 +330,14 @@ class _SheetBuilder:
     """Recovery columns of one joint, as sheets (lists of columns (L, 3) [rad]).
 
     Where a strip cannot be built, `splits` maps its segment to the fraction at which a
-    waypoint would help (at a sub-slab or layer boundary, else halfway). `fresh` keeps
-    each new sheet's outcome by the joint and the segment's two waypoints, for the
-    builders of later rounds, whose paths differ only where waypoints were added.
+    waypoint would help (at a sub-slab or layer boundary, else halfway). `memo` keeps the
+    outcome of each new sheet and each extension by what it depends on (the joint, the
+    segment's two waypoints, the sheet's route and first goal), for the builders of later
+    rounds, whose paths differ only where waypoints were added.
     """
 
     def __init__(self, grid: TolerantSet, gamma: np.ndarray, joint: int, margin: float = 0.0,
-                 fresh: dict | None = None):
+                 memo: dict | None = None):
         self.grid = grid
         self.lattice = grid.lattice
         self.gamma = gamma
@@ -355,7 +356,7 @@ class _SheetBuilder:
         self.free = _TriangleCheck(grid.scene, margin)
         self.splits: dict[int, float] = {}
         self.masks: dict[tuple[int, int], np.ndarray] = {}
-        self.fresh = {} if fresh is None else fresh
+        self.memo = {} if memo is None else memo
 
     def build(self) -> list[list[np.ndarray]] | None:
         """Sheets from the last waypoint back to θ_s, returned in order.
@@ -416,11 +417,11 @@ class _SheetBuilder:
 
     def _fresh(self, j: int) -> dict | None:
         """Start a new sheet of the strip (j, j+1), or ask for a split (`_new_sheet`)."""
-        key = (self.joint, self.gamma[j].tobytes(), self.gamma[j + 1].tobytes())
-        if key not in self.fresh:
+        key = ('fresh', self.joint, self.gamma[j].tobytes(), self.gamma[j + 1].tobytes())
+        if key not in self.memo:
             block = self._new_sheet(j)
-            self.fresh[key] = (block, self.splits.get(j))
-        block, split = self.fresh[key]
+            self.memo[key] = (block, self.splits.get(j))
+        block, split = self.memo[key]
         if split is not None:
             self.splits[j] = split
         return None if block is None else dict(block, j0=j, j1=j + 1)
@@ -478,7 +479,20 @@ class _SheetBuilder:
         return None
 
     def _extend(self, block: dict, j: int) -> dict | None:
-        """Return the block with waypoint j's column in front, if its fan and route are free there.
+        """Return the block with waypoint j's column in front, if free there (`_front_goal`)."""
+        key = ('extend', self.joint, block['route'].tobytes(), block['goals'][0].tobytes(),
+               self.gamma[j].tobytes(), self.gamma[j + 1].tobytes())
+        if key not in self.memo:
+            self.memo[key] = self._front_goal(block, j)
+        goal = self.memo[key]
+        if goal is None:
+            return None
+        grown = dict(block)
+        grown.update(j0=j, goals=[goal] + block['goals'])
+        return grown
+
+    def _front_goal(self, block: dict, j: int) -> np.ndarray | None:
+        """Return the goal of waypoint j's column in front of the block, or None.
 
         Over the strip (j, j+1) the new column's first piece and the next column's sweep
         the triangle (P_j, P_{j+1}, hub), which must lie in the cells certified in every
@@ -499,11 +513,7 @@ class _SheetBuilder:
             if (best is None or distance < best[0]) and distance <= _GOAL_STEP and \
                     self._ends_free(mask, end, goal, following):
                 best = (distance, goal)
-        if best is None:
-            return None
-        grown = dict(block)
-        grown.update(j0=j, goals=[best[1]] + block['goals'])
-        return grown
+        return None if best is None else best[1]
 
     def _ends_free(self, mask: np.ndarray, end: np.ndarray, goal_a: np.ndarray,
                    goal_b: np.ndarray) -> bool:
