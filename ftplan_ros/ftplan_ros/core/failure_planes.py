@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from .angles import wrap_angle
@@ -70,14 +71,27 @@ def crossing_segments(values: np.ndarray, levels: np.ndarray, periodic: bool) ->
     Segment k joins samples k and k+1. For a periodic joint the difference is wrapped, and
     a jump across ±π between neighbours is not a crossing (neighbours are close).
     """
-    diff = values[None, :] - levels[:, None]
-    if periodic:
-        diff = wrap_angle(diff)
-    below = diff < 0.0
-    change = below[:, :-1] != below[:, 1:]
-    if periodic:
-        change &= np.abs(diff[:, 1:] - diff[:, :-1]) < np.pi
-    return change
+    return _crossings(np.ascontiguousarray(values, dtype=float),
+                      np.ascontiguousarray(levels, dtype=float), bool(periodic))
+
+
+@numba.njit(cache=True)
+def _crossings(values, levels, periodic):
+    """`crossing_segments` in one compiled pass (no (C, K) temporaries)."""
+    count = values.shape[0]
+    out = np.zeros((levels.shape[0], max(count - 1, 0)), dtype=np.bool_)
+    for c in range(levels.shape[0]):
+        before = values[0] - levels[c]
+        if periodic:
+            before = np.pi - (np.pi - before) % (2.0 * np.pi)
+        for k in range(1, count):
+            after = values[k] - levels[c]
+            if periodic:
+                after = np.pi - (np.pi - after) % (2.0 * np.pi)
+            if (before < 0.0) != (after < 0.0) and (not periodic or abs(after - before) < np.pi):
+                out[c, k - 1] = True
+            before = after
+    return out
 
 
 def necessary_condition(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray,
