@@ -307,6 +307,7 @@ def test_label_wrapped_finds_the_components_round_the_torus():
         structure = full if trial % 2 else layer_structure(int(rng.integers(3)))
         labels = label_wrapped(mask, structure, periodic)
         assert np.all((labels > 0) == mask)
+        assert np.array_equal(np.unique(labels[mask]), np.arange(1, labels.max() + 1))
         truth = union_find_labels(mask, structure, periodic)
         a, b = labels[mask], truth[mask]
         # The same partition: equal labels exactly where the referee's are equal.

@@ -44,8 +44,6 @@ from functools import cached_property
 import numba
 import numpy as np
 from scipy import ndimage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .distance_kernels import planar_joint_points, segment_disk_clearance
 from .errors import InputError
@@ -439,13 +437,44 @@ def label_wrapped(mask: np.ndarray, structure: np.ndarray, periodic: np.ndarray,
             second.append(b[keep])
     if not first:
         return inner
-    a, b = np.concatenate(first), np.concatenate(second)
-    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(count + 1, count + 1))
-    _, merged = connected_components(graph, directed=False)
-    # Renumber the merged components 1.. (0 stays the background's).
-    _, renumbered = np.unique(merged, return_inverse=True)
-    renumbered = (renumbered - renumbered[0]).astype(np.int32)
-    return renumbered[inner]
+    offset = np.array([1 if p else 0 for p in periodic], dtype=np.int64)
+    return _merged_inner(labels, count, np.concatenate(first), np.concatenate(second), offset,
+                         np.array(mask.shape, dtype=np.int64))
+
+
+@numba.njit(cache=True)
+def _merged_inner(labels, count, first, second, offset, shape):
+    """Return the labels of the cells `offset` (3,) into `labels`, merged and renumbered.
+
+    Labels first[p] and second[p] (1..count) are one component; the merged components
+    are numbered 1.. in the order of their smallest label, 0 stays the background's.
+    """
+    parent = np.arange(count + 1)
+    for p in range(first.shape[0]):
+        a, b = first[p], second[p]
+        while parent[a] != a:
+            a = parent[a]
+        while parent[b] != b:
+            b = parent[b]
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+    number = np.zeros(count + 1, dtype=np.int32)
+    components = 0
+    for label in range(1, count + 1):
+        root = parent[label]
+        while parent[root] != root:
+            root = parent[root]
+        if root == label:
+            components += 1
+            number[label] = components
+        else:
+            number[label] = number[root]
+    out = np.empty((shape[0], shape[1], shape[2]), dtype=np.int32)
+    for i in range(shape[0]):
+        for j in range(shape[1]):
+            for k in range(shape[2]):
+                out[i, j, k] = number[labels[i + offset[0], j + offset[1], k + offset[2]]]
+    return out
 
 
 def layer_structure(joint: int) -> np.ndarray:
