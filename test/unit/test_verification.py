@@ -50,6 +50,28 @@ def test_certified_triangles_never_collide_under_dense_sampling():
     assert certified > 10 and refused > 3  # both outcomes exercised
 
 
+@pytest.mark.parametrize('corner_count', [2, 3])
+def test_the_compiled_planar_certificate_is_the_general_one(corner_count):
+    obstacles = [Obstacle('sphere', (1.3, 0.8, 0.0), radius=0.25),
+                 Obstacle('sphere', (-0.5, 1.5, 0.1), radius=0.3),
+                 Obstacle('sphere', (30.0, 0.0, 0.0), radius=1.0)]  # culled: caps the clearance
+    compiled = CollisionChecker(replace(ARM, link_radius=0.05), obstacles)
+    general = CollisionChecker(replace(ARM, link_radius=0.05), obstacles, backend='fcl')
+    assert compiled.planar_disks is not None and general.planar_disks is None
+    rng = np.random.default_rng(12)
+    outcomes = set()
+    for trial in range(80):
+        centres = rng.uniform(-np.pi, np.pi, (6, 1, 3))
+        corners = centres + rng.uniform(-0.2, 0.2, (6, corner_count, 3))
+        margin = 0.0 if trial % 2 else 0.05
+        ok, failed, smallest, samples = certify_simplices(compiled, corners, margin, 5)
+        expected = certify_simplices(general, corners, margin, 5)
+        assert (ok, failed, samples) == (expected[0], expected[1], expected[3])
+        assert smallest == pytest.approx(expected[2], abs=1e-12)
+        outcomes.add(ok)
+    assert outcomes == {True, False}
+
+
 def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():
     checker = CollisionChecker(ARM, [Obstacle('sphere', (1.5, 0.0, 0.0), radius=0.1)])
     through = np.array([[[0.0, 0.3, 0.0], [0.0, -0.3, 0.0], [0.05, 0.0, 0.0]]])

@@ -164,7 +164,7 @@ class CollisionChecker:
         moving_kinds = self._shapes.kinds[:self._moving, None]
         self._modes = pair_modes(moving_kinds, self._obstacles.kinds[None, :])
         self._exact = exact_pairs(moving_kinds, self._obstacles.kinds[None, :])
-        self._disks = self._planar_disks()
+        self.planar_disks = self._planar_disks()
 
     @property
     def n_channels(self) -> int:
@@ -250,27 +250,29 @@ class CollisionChecker:
 
     # Tiers --------------------------------------------------------------------------
 
-    def _planar_disks(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Return the kept spheres' centres (P, 3) and radii (P,) [m], or None.
+    def _planar_disks(self) -> tuple | None:
+        """Return the planar fast path's arrays, or None where it does not apply.
 
-        They feed the planar fast path, which applies to a planar chain (a capsule per
-        link, no self-collision pairs) among spheres: tier 1 is then exact, and
-        `planar_link_clearances` computes it from the joint angles without posing frames.
+        It applies to a planar chain (a capsule per link, no self-collision pairs) among
+        spheres: tier 1 is then exact, and `planar_link_clearances` computes it from the
+        joint angles without posing frames. The arrays are its arguments but the
+        configurations: link lengths (n,) [m], link radius [m], the kept spheres' centres
+        (P, 3) [m] and radii (P,) [m]; then the cap of the culled ones [m] (`_cull`).
+        Channel k is link k + 1.
         """
         robot = self.robot
         if (self.backend != 'auto' or not isinstance(robot, PlanarChain)
                 or len(self._shape_pairs) or np.any(self._obstacles.kinds != CODES['sphere'])):
             return None
-        return (np.ascontiguousarray(self._obstacles.centres).reshape(-1, 3),
-                np.ascontiguousarray(self._obstacles.parameters[:, 0]))
+        return (robot.kernel_parameters, float(robot.link_radius),
+                np.ascontiguousarray(self._obstacles.centres).reshape(-1, 3),
+                np.ascontiguousarray(self._obstacles.parameters[:, 0]), float(self._cap))
 
     def _clearance_block(self, thetas: np.ndarray, needed: np.ndarray, refine: bool,
                          ) -> np.ndarray:
-        if self._disks is not None:
-            robot = self.robot
-            out = planar_link_clearances(robot.kernel_parameters, float(robot.link_radius),
-                                         *self._disks, np.ascontiguousarray(thetas))
-            return np.minimum(out, self._cap)
+        if self.planar_disks is not None:
+            *arrays, cap = self.planar_disks
+            return np.minimum(planar_link_clearances(*arrays, np.ascontiguousarray(thetas)), cap)
         frames = np.ascontiguousarray(self.robot.link_frames(thetas))  # (N, L, 4, 4)
         poses = shape_poses(frames, self._links, self._placements)  # (N, S, 4, 4)
         out = np.full((len(thetas), self.n_channels), np.inf)
