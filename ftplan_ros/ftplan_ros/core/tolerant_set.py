@@ -93,8 +93,9 @@ def _link_motion_bound(points, arms, half, k):
         stretch += arms[k, b] * half[b]
     bound = 1e-9
     for a in range(k + 1):
-        d0 = np.hypot(points[k, 0] - points[a, 0], points[k, 1] - points[a, 1])
-        d1 = np.hypot(points[k + 1, 0] - points[a, 0], points[k + 1, 1] - points[a, 1])
+        d0 = np.sqrt((points[k, 0] - points[a, 0]) ** 2 + (points[k, 1] - points[a, 1]) ** 2)
+        d1 = np.sqrt((points[k + 1, 0] - points[a, 0]) ** 2
+                     + (points[k + 1, 1] - points[a, 1]) ** 2)
         bound += half[a] * (max(d0, d1) + stretch)
     return bound
 
@@ -183,20 +184,25 @@ def _classify_octree(lengths, link_radius, centres, radii, arms, lower, step, co
                 stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = 0, i, j, k
                 top += 1
     # Joints 1 and 2 at the centre of every (θ_1, θ_2) cell of every level: the base,
-    # joint 2, joint 3 (x, y) and θ_1 + θ_2, as `planar_joint_points` computes them.
-    elbows = np.zeros((levels + 1, cells, cells, 7))
+    # joint 2, joint 3 (x, y) as `planar_joint_points` computes them, then the cosine
+    # and sine of θ_1 + θ_2; and those of θ_3 at every θ_3 cell. The last link's angle
+    # θ_1 + θ_2 + θ_3 then costs no cosine or sine (the sum formulas).
+    elbows = np.zeros((levels + 1, cells, cells, 8))
+    wrists = np.zeros((levels + 1, cells, 2))
     for level in range(levels + 1):
         size = cells // (coarsest << level)
         for i in range(coarsest << level):
             a = lower[0] + (i + 0.5) * size * step[0]
+            third = lower[2] + (i + 0.5) * size * step[2]
+            wrists[level, i, 0], wrists[level, i, 1] = np.cos(third), np.sin(third)
             for j in range(coarsest << level):
                 phi = a + (lower[1] + (j + 0.5) * size * step[1])
                 row = elbows[level, i, j]
                 row[2] = lengths[0] * np.cos(a)
                 row[3] = lengths[0] * np.sin(a)
-                row[4] = row[2] + lengths[1] * np.cos(phi)
-                row[5] = row[3] + lengths[1] * np.sin(phi)
-                row[6] = phi
+                row[6], row[7] = np.cos(phi), np.sin(phi)
+                row[4] = row[2] + lengths[1] * row[6]
+                row[5] = row[3] + lengths[1] * row[7]
     points = np.zeros((n + 1, 2))
     half = np.empty(n)
     evaluated = 0
@@ -208,11 +214,11 @@ def _classify_octree(lengths, link_radius, centres, radii, arms, lower, step, co
             continue
         size = cells // (coarsest << level)
         row = elbows[level, i, j]
-        phi = row[6] + (lower[2] + (k + 0.5) * size * step[2])
+        cos_k, sin_k = wrists[level, k, 0], wrists[level, k, 1]
         for p in range(3):
             points[p, 0], points[p, 1] = row[2 * p], row[2 * p + 1]
-        points[3, 0] = points[2, 0] + lengths[2] * np.cos(phi)
-        points[3, 1] = points[2, 1] + lengths[2] * np.sin(phi)
+        points[3, 0] = points[2, 0] + lengths[2] * (row[6] * cos_k - row[7] * sin_k)
+        points[3, 1] = points[2, 1] + lengths[2] * (row[7] * cos_k + row[6] * sin_k)
         for a in range(n):
             half[a] = 0.5 * size * step[a]
         three = _segment_status(points[2], points[3], centres, radii, link_radius,
