@@ -319,26 +319,30 @@ def planar_joint_points(lengths, theta, points):
         points[k + 1, 1] = points[k, 1] + lengths[k] * np.sin(phi)
 
 
+@numba.njit(cache=True, inline='always')
+def segment_gap2(a, b, centre):
+    """Squared distance [m²] from a point `centre` (3,) to the segment a-b (2-D, in z = 0)."""
+    dx = b[0] - a[0]
+    dy = b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    ex = centre[0] - a[0]
+    ey = centre[1] - a[1]
+    t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
+    t = min(1.0, max(0.0, t))
+    fx = ex - t * dx
+    fy = ey - t * dy
+    return fx * fx + fy * fy + centre[2] * centre[2]
+
+
 @numba.njit(cache=True)
 def segment_disk_clearance(a, b, centres, radii):
     """Smallest distance [m] from segment a-b (2-D points in z = 0) to the spheres.
 
     `centres` (P, 3) [m], `radii` (P,) [m]; negative inside one, +inf without spheres.
     """
-    dx = b[0] - a[0]
-    dy = b[1] - a[1]
-    length2 = dx * dx + dy * dy
     best = np.inf
     for p in range(centres.shape[0]):
-        ex = centres[p, 0] - a[0]
-        ey = centres[p, 1] - a[1]
-        t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
-        t = min(1.0, max(0.0, t))
-        fx = ex - t * dx
-        fy = ey - t * dy
-        d = np.sqrt(fx * fx + fy * fy + centres[p, 2] * centres[p, 2]) - radii[p]
-        if d < best:
-            best = d
+        best = min(best, np.sqrt(segment_gap2(a, b, centres[p])) - radii[p])
     return best
 
 

@@ -45,7 +45,7 @@ import numba
 import numpy as np
 from scipy import ndimage
 
-from .distance_kernels import planar_joint_points, segment_disk_clearance
+from .distance_kernels import planar_joint_points, segment_disk_clearance, segment_gap2
 from .errors import InputError
 from .robot import PlanarChain
 from .scene import Scene
@@ -120,20 +120,11 @@ def _link_status(lengths, link_radius, centres, radii, arms, theta, half, k, poi
 def _segment_status(a, b, centres, radii, link_radius, bound):
     """0 when the capsule a-b's clearance is below -bound, 1 when above bound, else 2.
 
-    `segment_disk_clearance` decided on squared distances (no square roots).
+    `segment_disk_clearance` compared on squared distances: no square roots.
     """
-    dx = b[0] - a[0]
-    dy = b[1] - a[1]
-    length2 = dx * dx + dy * dy
     status = 1
     for p in range(centres.shape[0]):
-        ex = centres[p, 0] - a[0]
-        ey = centres[p, 1] - a[1]
-        t = (ex * dx + ey * dy) / length2 if length2 > 0.0 else 0.0
-        t = min(1.0, max(0.0, t))
-        fx = ex - t * dx
-        fy = ey - t * dy
-        gap2 = fx * fx + fy * fy + centres[p, 2] * centres[p, 2]
+        gap2 = segment_gap2(a, b, centres[p])
         near = radii[p] + link_radius - bound
         if near > 0.0 and gap2 < near * near:
             return 0
