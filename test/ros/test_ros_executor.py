@@ -9,7 +9,8 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from ftplan_msgs_py import create_locked_joint
+from ftplan_msgs_py import create_joint_state, create_locked_joint, read_joint_trajectory
+from ftplan_ros.core.paths import point_at_fraction
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.reporting import parse_vector
@@ -185,6 +186,39 @@ def test_a_lock_during_the_nominal_phase_is_recovered_by_the_core(slow_suite):
     q = np.array(parse_vector(final.values['configuration']))
     assert q[2] == pytest.approx(locked[2], abs=1e-6)
     assert final.values['collisions'] == '0'
+
+
+def test_the_stop_after_a_lock_is_judged_on_joint_states_sent_after_it(ros):
+    """Found by the drills on a loaded machine: joint states queued from before a lock,
+    where the arm had stood, made the executor recover from there, not from where joint2
+    had locked; its recovery command then fought the locked joint until stall_timeout."""
+    ros.make(PlannerNode)
+    ros.make(ExecutorNode, max_joint_speed=FAST)
+    ros.probe.listen(JointTrajectory, '/ftplan/joint_command')
+    motion = plan(ros)
+    names = ('joint1', 'joint2', 'joint3')
+    theta_s = motion.trajectory[0]
+    ros.probe.advertise(JointState, '/joint_states', readers=2)    # planner and executor
+    ros.probe.advertise(JointState, '/ftplan/locked_joint', readers=1)
+    number = execute(ros)
+    for _ in range(2):                      # the arm stands at θ_s: the nominal path begins
+        stood = ros.probe.get_clock().now().to_msg()
+        ros.probe.publish(JointState, '/joint_states', create_joint_state(names, theta_s,
+                                                                          stamp=stood))
+    state_of(ros, number, 'nominal')
+    ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint2'))
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint2 locked at about'))
+    moved = point_at_fraction(motion.trajectory, 0.02)   # where the arm went on and locked
+    for stamp in (stood, stood, None, None):  # two late states from before the lock, then now
+        stamp = stamp or ros.probe.get_clock().now().to_msg()
+        target = theta_s if stamp is stood else moved
+        ros.probe.publish(JointState, '/joint_states', create_joint_state(names, target,
+                                                                          stamp=stamp))
+        time.sleep(0.05)
+    wait_for(lambda: ros.probe.logged('ftplan_executor', 'following the recovery path'))
+    recovery = read_joint_trajectory(ros.probe.received('/ftplan/joint_command')[-1], names)
+    assert recovery.positions[:, 1] == pytest.approx(moved[1], abs=1e-9)
+    assert abs(moved[1] - theta_s[1]) > 1e-3   # the two places differ in joint2
 
 
 def test_an_execution_without_joint_states_fails_after_start_timeout(ros):

@@ -170,6 +170,7 @@ class Execution:
     reason: str = ''
     approach: str = ''
     requested_ns: int = 0            # ROS time [ns] of the request; older joint states are stale
+    lock_received_ns: int = 0        # ROS time [ns] of the lock; the stop is judged after it
     lock_phase: State | None = None  # the phase the lock came in
     commanded: float = 0.0           # monotonic [s] of the last command
     reapproach: bool = False         # stopped on the approach (an obstacle): approach again
@@ -629,7 +630,11 @@ class ExecutorNode(Node):
             ex.progress, _ = progress_along(ex.nominal, q)
         if ex.command is None:
             if ex.locked_joint is not None:
-                self._wait_for_stop(q)
+                # Joint states sent before the lock may still be queued (the executor takes
+                # another topic's messages in no set order with the lock's): a stop judged
+                # on them would recover from where the arm no longer is.
+                if stamp_ns == 0 or stamp_ns >= ex.lock_received_ns:
+                    self._wait_for_stop(q)
             elif ex.reapproach:
                 if self._standing(q):
                     self._start_motion(q)
@@ -697,6 +702,7 @@ class ExecutorNode(Node):
             return
         self._stop()
         ex.locked_joint, ex.lock_received = joint, time.monotonic()
+        ex.lock_received_ns = self.get_clock().now().nanoseconds
         ex.stop_requested = ex.lock_received
         ex.lock_phase = self.state
         ex.command = None
