@@ -252,7 +252,7 @@ def sample_cells(lattice, cells, per_cell, rng):
 
 
 @pytest.mark.parametrize('radius, margin, height', [(0.0, 0.0, 0.0), (0.05, 0.0, 0.0),
-                                                    (0.0, 0.08, 0.0), (0.05, 0.0, 0.2)])
+                                                    (0.0, 0.08, 0.0), (0.05, 0.0, 0.3)])
 def test_cell_classes_hold_for_every_configuration_sampled(radius, margin, height):
     scene = disk_scene(radius, disks=((1.3, 0.8, 0.45), (-0.5, 1.5, 0.3), (0.9, -1.1, 0.4)),
                        height=height)
