@@ -11,9 +11,11 @@ import numpy as np
 
 from .collision import CollisionChecker
 from .curves import FrozenJoints
+from .failure_planes import crossing_segments
 from .manifolds import ManifoldOptions, trace_self_motion_manifolds
 from .robot import PlanarChain, Robot, task_errors, task_residuals
 from .scene import Obstacle
+from .verification import certify_simplices
 from .web_search import load_sheet_kernels
 
 
@@ -30,7 +32,12 @@ def load_kernels(robot: Robot) -> None:
         trace_self_motion_manifolds(traced, traced.forward_kinematics(theta[redundancy - 1:]),
                                     np.random.default_rng(0), ManifoldOptions(seeds=1))
     near = tuple(float(v) for v in robot.skeleton(theta)[-1])  # the tool: within reach
-    obstacles = [Obstacle('sphere', near, radius=0.1), Obstacle('box', near, size=(0.1,) * 3)]
-    CollisionChecker(robot, obstacles).clearance(np.stack([theta, theta]), needed=np.inf)
+    sphere = Obstacle('sphere', near, radius=0.1)
+    corners = np.stack([theta, theta + 0.01, theta - 0.01])[None]
+    for obstacles in ([sphere, Obstacle('box', near, size=(0.1,) * 3)], [sphere]):
+        checker = CollisionChecker(robot, obstacles)  # spheres alone: a planar fast path
+        checker.clearance(np.stack([theta, theta]), needed=np.inf)
+        certify_simplices(checker, corners, 0.0, 1)
+    crossing_segments(np.array([0.0, 1.0]), np.array([0.5]), periodic=True)
     if isinstance(robot, PlanarChain) and robot.n_joints == 3:
         load_sheet_kernels()  # the recovery sheets' grid, searches and slices

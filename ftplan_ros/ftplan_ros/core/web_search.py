@@ -878,6 +878,7 @@ def load_sheet_kernels() -> None:
                          'obstacles': [{'type': 'sphere', 'center': [2.5, 0.0], 'radius': 0.2}],
                          'task': {'start': [2.0, 0.5], 'goal': [1.0, 0.5]}})
     grid = tolerant_set(scene, 32)
+    proves_no(grid)  # the liberal side's kernels too
     mask = grid.classes.certified
     _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
