@@ -215,8 +215,15 @@ def test_the_stop_after_a_lock_is_judged_on_joint_states_sent_after_it(ros):
         ros.probe.publish(JointState, '/joint_states', create_joint_state(names, target,
                                                                           stamp=stamp))
         time.sleep(0.05)
-    wait_for(lambda: ros.probe.logged('ftplan_executor', 'following the recovery path'))
-    recovery = read_joint_trajectory(ros.probe.received('/ftplan/joint_command')[-1], names)
+
+    def after_the_stop():
+        """The commands after the executor's stop (an empty command) on the lock."""
+        commands = ros.probe.received('/ftplan/joint_command')
+        stops = [k for k, command in enumerate(commands) if not command.points]
+        return commands[stops[-1] + 1:] if stops else []
+
+    recovery = read_joint_trajectory(wait_for(after_the_stop, what='the recovery command')[0],
+                                     names)
     assert recovery.positions[:, 1] == pytest.approx(moved[1], abs=1e-9)
     assert abs(moved[1] - theta_s[1]) > 1e-3   # the two places differ in joint2
 
