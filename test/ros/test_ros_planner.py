@@ -172,7 +172,7 @@ def test_obstacles_add_to_the_scene_and_malformed_markers_keep_the_previous_ones
     wait_for(lambda: ros.probe.logged('ftplan_planner', '1 obstacles from /ftplan/obstacles'))
     response = ros.probe.call(GetPlan, '/ftplan/plan', request())
     assert response.plan.poses == []
-    assert 'covers the robot base' in ros.probe.statuses(STATUS)[-1].message
+    wait_for(lambda: 'covers the robot base' in ros.probe.statuses(STATUS)[-1].message)
 
     malformed = {
         'wrong frame': Marker(header=Header(frame_id='map'), ns='test', id=2,
@@ -193,7 +193,7 @@ def test_obstacles_add_to_the_scene_and_malformed_markers_keep_the_previous_ones
                                                        'keeping the 1 previous')) > b)
     response = ros.probe.call(GetPlan, '/ftplan/plan', request())
     assert response.plan.poses == []       # the obstacle over the base is still there
-    assert 'covers the robot base' in ros.probe.statuses(STATUS)[-1].message
+    wait_for(lambda: 'covers the robot base' in ros.probe.statuses(STATUS)[-1].message)
 
     ros.probe.publish(MarkerArray, '/ftplan/obstacles', MarkerArray(
         markers=[Marker(action=Marker.DELETEALL)]), LATCHED_QOS)

@@ -251,7 +251,9 @@ def test_the_plan_says_how_the_arm_gets_to_theta_s_and_the_executor_goes_that_wa
     ros.probe.listen(JointState, '/joint_states')
     wait_for(lambda: ros.probe.received('/joint_states'))
     motion = plan(ros)
-    status = [s for s in ros.probe.statuses(PLAN_STATUS) if s.values['stamp'] == motion.stamp][0]
+    status = wait_for(lambda: [s for s in ros.probe.statuses(PLAN_STATUS)
+                               if s.values.get('stamp') == motion.stamp],
+                      what='the plan status')[0]  # /diagnostics may come after the answer
     assert status.values['approach'].startswith('along M_s^F (')
     approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
                                  if stamp_key(m.header.stamp) == motion.stamp])[0]
