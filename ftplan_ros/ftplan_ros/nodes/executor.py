@@ -633,13 +633,12 @@ class ExecutorNode(Node):
                 # Joint states sent before the lock may still be queued (the executor takes
                 # another topic's messages in no set order with the lock's): a stop judged
                 # on them would recover from where the arm no longer is.
-                if stamp_ns == 0 or stamp_ns >= ex.lock_received_ns:
+                if _sent_since(stamp_ns, ex.lock_received_ns):
                     self._wait_for_stop(q)
             elif ex.reapproach:
                 if self._standing(q):
                     self._start_motion(q)
-            elif self.state == State.APPROACHING and (stamp_ns == 0 or
-                                                      stamp_ns >= ex.requested_ns):
+            elif self.state == State.APPROACHING and _sent_since(stamp_ns, ex.requested_ns):
                 self._start_motion(q)
             return
         _, deviation = progress_along(ex.command, q)
@@ -881,6 +880,14 @@ class ExecutorNode(Node):
         if tolerated is not None:
             values['tolerated_joints'] = join_names(tolerated)  # of the execution's plan
         self.diagnostics.report('execution', level, message, values, log=log)
+
+
+def _sent_since(stamp_ns: int, since_ns: int) -> bool:
+    """Whether a message stamped `stamp_ns` [ns, ROS time] was sent at `since_ns` or later.
+
+    An unstamped message (0) counts as sent now: older ones may still be queued.
+    """
+    return stamp_ns == 0 or stamp_ns >= since_ns
 
 
 def main(args=None) -> int:
