@@ -26,14 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .components import label_wrapped
 from .scene import Scene
-from .tolerant_set import (
-    TolerantSet,
-    label_wrapped,
-    preimage_samples,
-    supports,
-    tolerant_set,
-)
+from .tolerant_set import TolerantSet, preimage_samples, supports, tolerant_set
 
 FULL = np.ones((3, 3, 3), dtype=bool)
 

@@ -43,8 +43,8 @@ from functools import cached_property
 
 import numba
 import numpy as np
-from scipy import ndimage
 
+from .components import cells_of, layer_labels
 from .distance_kernels import planar_joint_points, segment_disk_clearance, segment_gap2
 from .errors import InputError
 from .robot import PlanarChain
@@ -407,82 +407,6 @@ def classify_cells(scene: Scene, cells: int, coarsest: int = 16,
     return CellClasses(lattice, certified, possible, evaluations)
 
 
-def label_wrapped(mask: np.ndarray, structure: np.ndarray, periodic: np.ndarray,
-                  ) -> np.ndarray:
-    """Label the components of `mask` under `structure`, joined across periodic axes.
-
-    Like `scipy.ndimage.label` (0 outside the mask, components numbered from 1), with
-    each periodic axis wrapped round: the mask is padded by one wrapped cell along those
-    axes, and a pad cell's label is merged with the label of the cell it copies.
-    """
-    pad = [(1, 1) if p else (0, 0) for p in periodic]
-    padded = np.pad(mask, pad, mode='wrap')
-    labels, count = ndimage.label(padded, structure=structure)
-    inner = labels[tuple(slice(1, -1) if p else slice(None) for p in periodic)]
-    if count == 0:
-        return inner
-    first, second = [], []
-    for axis, p in enumerate(periodic):
-        if not p:
-            continue
-        size = mask.shape[axis]
-        for pad_at, source in ((0, size), (size + 1, 1)):
-            a = np.take(labels, pad_at, axis=axis).ravel()
-            b = np.take(labels, source, axis=axis).ravel()
-            keep = (a > 0) & (b > 0)
-            first.append(a[keep])
-            second.append(b[keep])
-    if not first:
-        return inner
-    offset = np.array([1 if p else 0 for p in periodic], dtype=np.int64)
-    return _merged_inner(labels, count, np.concatenate(first), np.concatenate(second), offset,
-                         np.array(mask.shape, dtype=np.int64))
-
-
-@numba.njit(cache=True)
-def _merged_inner(labels, count, first, second, offset, shape):
-    """Return the labels of the cells `offset` (3,) into `labels`, merged and renumbered.
-
-    Labels first[p] and second[p] (1..count) are one component; the merged components
-    are numbered 1.. in the order of their smallest label, 0 stays the background's.
-    """
-    parent = np.arange(count + 1)
-    for p in range(first.shape[0]):
-        a, b = first[p], second[p]
-        while parent[a] != a:
-            a = parent[a]
-        while parent[b] != b:
-            b = parent[b]
-        if a != b:
-            parent[max(a, b)] = min(a, b)
-    number = np.zeros(count + 1, dtype=np.int32)
-    components = 0
-    for label in range(1, count + 1):
-        root = parent[label]
-        while parent[root] != root:
-            root = parent[root]
-        if root == label:
-            components += 1
-            number[label] = components
-        else:
-            number[label] = number[root]
-    out = np.empty((shape[0], shape[1], shape[2]), dtype=np.int32)
-    for i in range(shape[0]):
-        for j in range(shape[1]):
-            for k in range(shape[2]):
-                out[i, j, k] = number[labels[i + offset[0], j + offset[1], k + offset[2]]]
-    return out
-
-
-def layer_structure(joint: int) -> np.ndarray:
-    """Return the 3x3x3 structure joining cells of one θ_joint-layer that touch (8 in 2-D)."""
-    structure = np.zeros((3, 3, 3), dtype=bool)
-    index = [slice(None)] * 3
-    index[joint] = 1
-    structure[tuple(index)] = True
-    return structure
-
-
 def two_link_solutions(a: float, b: float, target: np.ndarray) -> np.ndarray:
     """Solutions (s, 2) [rad] (first link's angle, elbow) of a 2R arm of links a, b [m].
 
@@ -607,12 +531,11 @@ class TolerantSet:
         possibly_goal = self.near_goal & classes.possible
         out = {}
         for joint in self.joints:
-            labels = label_wrapped(classes.possible, layer_structure(joint),
-                                   _other_periodic(lattice, joint))
+            labels = layer_labels(classes.possible, joint, lattice.periodic)
             escape = np.zeros(labels.max() + 1, dtype=bool)
-            escape[np.unique(labels[possibly_goal])] = True
+            escape[labels[possibly_goal]] = True
             escape[0] = False
-            out[joint] = escape[labels]
+            out[joint] = cells_of(labels, escape)
         return out
 
     @cached_property
@@ -622,13 +545,6 @@ class TolerantSet:
         for joint in self.joints:
             out &= self.liberal[joint]
         return out
-
-
-def _other_periodic(lattice: JointLattice, joint: int) -> np.ndarray:
-    """(3,) bool: the periodic axes a θ_joint-layer wraps round (not the layer's own)."""
-    others = lattice.periodic.copy()
-    others[joint] = False
-    return others
 
 
 def sub_slab_count(robot: PlanarChain, step: float, joint: int, tolerance: float) -> int:
@@ -653,8 +569,7 @@ def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0
     certified, goals_of, slabs_of, subs = {}, {}, {}, {}
     for joint in scene.tolerated_joints:
         # Components of certified free cells covering every sub-slab with a goal.
-        labels = label_wrapped(classes.certified, layer_structure(joint),
-                               _other_periodic(lattice, joint))
+        labels = layer_labels(classes.certified, joint, lattice.periodic)
         m = sub_slab_count(robot, lattice.step[joint], joint, task.goal_tolerance)
         if m > 62:
             raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
@@ -669,7 +584,7 @@ def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0
         np.bitwise_or.at(coverage, label, np.left_shift(1, slab % m).astype(np.int64))
         full = coverage == (1 << m) - 1
         full[0] = False
-        certified[joint] = full[labels]
+        certified[joint] = cells_of(labels, full)
         goals_of[joint] = points[full[label]]
         slabs_of[joint] = slab[full[label]]
         subs[joint] = m
