@@ -12,13 +12,15 @@ from functools import cache
 import numpy as np
 import pytest
 from ftplan_testing import SCENES
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import shortest_path
 
 from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, recover
 from ftplan_ros.core.failure_planes import failure_hypercube
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.reference import Existence, decide_existence
 from ftplan_ros.core.verification import VerificationOptions, verify_surface
-from ftplan_ros.core.web_search import METHOD, PAPER_METHOD
+from ftplan_ros.core.web_search import METHOD, PAPER_METHOD, _bfs
 from ftplan_ros.crowded import RADII, crowded_scene
 
 HALF_DEGREE = np.radians(0.5)
@@ -179,3 +181,49 @@ def test_the_shipped_sheets_scenes_are_solved_by_the_sheets_alone(name):
     assert not plan(scene, PlannerOptions(methods=(PAPER_METHOD,))).feasible
     result = plan(scene)
     assert result.feasible and result.stats['method'] == METHOD
+
+
+def test_the_grid_search_finds_a_shortest_path_through_the_mask():
+    """`_bfs` against shortest path lengths on the explicit graph of neighbouring cells."""
+    rng = np.random.default_rng(21)
+    found = 0
+    for trial in range(200):
+        dims = 2 + trial % 2
+        shape = tuple(rng.integers(2, 12 if dims == 2 else 6, dims))
+        mask = rng.random(shape) < 0.7
+        target = mask & (rng.random(shape) < 0.05)
+        periodic = rng.random(dims) < 0.5
+        sources = np.argwhere(mask)[rng.integers(0, max(1, mask.sum()), 2)] if mask.any() \
+            else np.zeros((1, dims), dtype=np.int64)
+        cells = np.argwhere(mask)
+        index = np.full(shape, -1)
+        index[tuple(cells.T)] = np.arange(len(cells))
+        u, v = [], []
+        for offset in np.ndindex(*(3,) * dims):
+            step = np.array(offset) - 1
+            if not step.any():
+                continue
+            to = cells + step
+            ok = np.all(periodic | ((to >= 0) & (to < shape)), axis=1)
+            to = np.mod(to[ok], shape)
+            keep = mask[tuple(to.T)]
+            u.append(np.flatnonzero(ok)[keep])
+            v.append(index[tuple(to[keep].T)])
+        graph = coo_matrix((np.ones(sum(map(len, u))), (np.concatenate(u), np.concatenate(v))),
+                           shape=(len(cells), len(cells)))
+        distance = shortest_path(graph, unweighted=True,
+                                 indices=index[tuple(sources.T)][mask[tuple(sources.T)]])
+        goals = index[tuple(np.argwhere(target).T)]
+        nearest = distance[:, goals].min() if len(goals) and len(distance) else np.inf
+        path = _bfs(mask, periodic, sources, target)
+        if not np.isfinite(nearest):
+            assert path is None, trial
+            continue
+        found += 1
+        assert len(path) - 1 == nearest, trial
+        assert mask[tuple(path.T)].all() and target[tuple(path[-1])]
+        assert any(np.array_equal(path[0], s) for s in sources)
+        gaps = np.abs(np.diff(path, axis=0))
+        gaps = np.where(periodic, np.minimum(gaps, np.array(shape) - gaps), gaps)
+        assert gaps.max(initial=0) <= 1, trial
+    assert found > 50

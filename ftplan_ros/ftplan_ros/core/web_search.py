@@ -815,26 +815,29 @@ def _bfs(mask: np.ndarray, periodic: np.ndarray, sources: np.ndarray, target: np
 
 @numba.njit(cache=True)
 def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
-    """Breadth-first search over flat cells; returns the flat path or an empty array."""
+    """Breadth-first search over flat cells; returns the flat path or an empty array.
+
+    The queue is first in, first out, so the first target cell queued is the first one a
+    search that looks at the cells it takes out would reach: the search stops there.
+    """
     total = mask.shape[0]
     dims = shape.shape[0]
-    parent = np.full(total, -2, dtype=np.int64)
-    queue = np.empty(total, dtype=np.int64)
-    head = 0
+    parent = np.full(total, -2, dtype=np.int32)
+    queue = np.empty(total, dtype=np.int32)
     tail = 0
+    end = -1
     for s in sources:
         if mask[s] and parent[s] == -2:
             parent[s] = -1
             queue[tail] = s
             tail += 1
+            if end < 0 and target[s]:
+                end = s
     index = np.empty(dims, dtype=np.int64)
-    end = -1
-    while head < tail:
+    head = 0
+    while end < 0 and head < tail:
         cell = queue[head]
         head += 1
-        if target[cell]:
-            end = cell
-            break
         rest = cell
         for d in range(dims - 1, -1, -1):
             index[d] = rest % shape[d]
@@ -855,6 +858,9 @@ def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
                 parent[flat] = cell
                 queue[tail] = flat
                 tail += 1
+                if target[flat]:
+                    end = flat
+                    break
     if end < 0:
         return np.empty(0, dtype=np.int64)
     length = 0
