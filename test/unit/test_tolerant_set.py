@@ -15,7 +15,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ftplan_ros.core import CollisionChecker, InputError, load_scene, parse_scene, plan, recover
 from ftplan_ros.core.brute_force import recoverable_in_plane
-from ftplan_ros.core.components import cells_of, label_wrapped, layer_labels, layer_structure
+from ftplan_ros.core.components import cells_of, label_components, layer_labels
 from ftplan_ros.core.distance_kernels import planar_link_clearances
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.robot import PlanarChain
@@ -296,39 +296,25 @@ def union_find_labels(mask, structure, periodic):
     return label.reshape(mask.shape)
 
 
-def test_label_wrapped_finds_the_components_round_the_torus():
-    rng = np.random.default_rng(9)
-    full = np.ones((3, 3, 3), dtype=bool)
-    for trial in range(60):
-        shape = tuple(rng.integers(2, 7, 3))
-        mask = rng.random(shape) < rng.uniform(0.2, 0.6)
+def test_label_components_finds_the_components_round_the_torus():
+    """The compiled labelling against the explicit graph: all 26 neighbours, or a layer's 8."""
+    rng = np.random.default_rng(12)
+    for trial in range(400):
+        shape = tuple(rng.integers(1, 8, 3))
+        mask = rng.random(shape) < rng.uniform(0.2, 0.8)
         periodic = rng.random(3) < 0.5
-        structure = full if trial % 2 else layer_structure(int(rng.integers(3)))
-        labels = label_wrapped(mask, structure, periodic)
+        joint = int(rng.integers(3))
+        if trial % 2:
+            labels, structure = label_components(mask, periodic), np.ones((3, 3, 3), bool)
+        else:
+            labels, structure = layer_labels(mask, joint, periodic), np.zeros((3, 3, 3), bool)
+            structure[(slice(None),) * joint + (1,)] = True  # one layer: index 1 along it
+        assert labels.dtype == np.int32
         assert np.all((labels > 0) == mask)
         assert np.array_equal(np.unique(labels[mask]), np.arange(1, labels.max() + 1))
         truth = union_find_labels(mask, structure, periodic)
         a, b = labels[mask], truth[mask]
         # The same partition: equal labels exactly where the referee's are equal.
-        assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]), trial
-
-
-def test_layer_labels_find_each_layers_components_round_the_torus():
-    """The compiled layer labelling against the explicit graph, one or two cells wide too."""
-    rng = np.random.default_rng(12)
-    for trial in range(300):
-        shape = tuple(rng.integers(1, 8, 3))
-        mask = rng.random(shape) < rng.uniform(0.2, 0.8)
-        periodic = rng.random(3) < 0.5
-        joint = int(rng.integers(3))
-        labels = layer_labels(mask, joint, periodic)
-        assert labels.dtype == np.int32
-        assert np.all((labels > 0) == mask)
-        assert np.array_equal(np.unique(labels[mask]), np.arange(1, labels.max() + 1))
-        others = periodic.copy()
-        others[joint] = False  # a layer does not wrap round its own axis
-        truth = union_find_labels(mask, layer_structure(joint), others)
-        a, b = labels[mask], truth[mask]
         assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]), trial
         chosen = rng.random(labels.max() + 1) < 0.5
         assert np.array_equal(cells_of(labels, chosen), chosen[labels])

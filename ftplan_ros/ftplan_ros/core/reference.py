@@ -26,11 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .components import label_wrapped
+from .components import label_components
 from .scene import Scene
 from .tolerant_set import TolerantSet, preimage_samples, supports, tolerant_set
-
-FULL = np.ones((3, 3, 3), dtype=bool)
 
 
 class Existence(enum.Enum):
@@ -72,7 +70,7 @@ def proves_yes(grid: TolerantSet) -> bool:
     lattice = grid.lattice
     robot, task = grid.scene.robot, grid.scene.task
     lengths = np.asarray(robot.link_lengths, dtype=float)
-    labels = label_wrapped(inside, FULL, lattice.periodic)
+    labels = label_components(inside, lattice.periodic)
     starts = preimage_samples(lengths, np.asarray(task.start, dtype=float), 8 * lattice.cells)
     goals = np.vstack([grid.goal_points[j] for j in grid.joints] + [
         preimage_samples(lengths, np.asarray(task.goal, dtype=float), 8 * lattice.cells)])
@@ -89,7 +87,7 @@ def proves_no(grid: TolerantSet) -> bool:
     robot, task = grid.scene.robot, grid.scene.task
     start = lattice.tool_near(robot, np.asarray(task.start, dtype=float))
     goal = grid.near_goal
-    labels = label_wrapped(outside, FULL, lattice.periodic)
+    labels = label_components(outside, lattice.periodic)
     shared = np.intersect1d(labels[start & outside], labels[goal & outside])
     return not shared[shared > 0].size
 
