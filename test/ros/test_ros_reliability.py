@@ -264,6 +264,33 @@ def test_the_plan_says_how_the_arm_gets_to_theta_s_and_the_executor_goes_that_wa
     assert done.values['approach'].startswith('by the path given (')
 
 
+def test_an_arm_no_joint_move_frees_is_told_so_at_once_by_planner_and_executor(ros):
+    """From (1, 0, 0) among fig3a's disks no collision-free joint move reaches θ_s (the
+    joint grid proves it). Planner and executor each searched with RRT-Connect (3 x 1 s)
+    before they said "no collision-free joint move found"."""
+    pocket = [1.0, 0.0, 0.0]
+    ros.make(PlannerNode)
+    ros.make(ExecutorNode)
+    ros.make(SimNode, max_joint_speed=4.0, initial_configuration=pocket)
+    ros.probe.listen(JointTrajectory, '/ftplan/plan/approach', LATCHED_QOS)
+    ros.probe.listen(JointState, '/joint_states')
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    assert np.allclose(read_joint_state(ros.probe.received('/joint_states')[-1], NAMES), pocket)
+    motion = plan(ros)
+    status = wait_for(lambda: [s for s in ros.probe.statuses(PLAN_STATUS)
+                               if s.values.get('stamp') == motion.stamp],
+                      what='the plan status')[0]
+    proved = 'no collision-free joint move exists (proved on a 64^3 joint grid'
+    assert status.values['approach'].startswith(proved)
+    approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
+                                 if stamp_key(m.header.stamp) == motion.stamp])[0]
+    assert len(approach.points) == 0
+    failed = state_of(ros, execute(ros), 'failed')
+    assert failed.values['reason'].startswith('no collision-free approach to theta_s from '
+                                              f'where the arm stands: {proved}')
+    assert np.allclose(read_joint_state(ros.probe.received('/joint_states')[-1], NAMES), pocket)
+
+
 def test_the_executor_takes_the_planners_approach_that_ends_whole_turns_from_theta_s(ros):
     """On detour the planner's RRT-Connect approach ends at θ_s with joint2 a turn up. The
     executor took only an exact end, so it planned an approach of its own in every

@@ -1,5 +1,7 @@
 """Approaches from where the arm stands (core/approach.py): M_s^F, RRT-Connect, locks."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from ftplan_testing import REPO, SCENES, paper_scene
@@ -14,6 +16,7 @@ from ftplan_ros.core.approach import (
 )
 from ftplan_ros.core.manifolds import project_to_preimage, trace_self_motion_manifolds
 from ftplan_ros.core.paths import densify
+from ftplan_ros.core.scene import Obstacle
 
 X_S = np.array([2.0, 0.0])
 # A disk that cuts M_s in two arcs, each holding failure-tolerant starts; the planner's
@@ -104,7 +107,42 @@ def test_a_pocket_the_arm_cannot_leave_gives_no_approach_and_says_why():
     approaches = planner_for(scene, rrt_time=0.2, rrt_attempts=1)
     found = approaches.joint_move(np.zeros(3), np.array([1.0, 0.0, 0.0]))
     assert not found.ok and found.route is Route.NONE
-    assert 'no collision-free joint move found' in found.reason
+    assert 'no collision-free joint move exists (proved on a 64^3 joint grid' in found.reason
+    # Where the grid does not apply (a box), RRT-Connect searches and gives up.
+    boxed = replace(scene, obstacles=scene.obstacles + (
+        Obstacle('box', (-2.5, -2.5, 0.0), size=(0.1, 0.1, 0.1)),))
+    approaches = planner_for(boxed, rrt_time=0.2, rrt_attempts=1)
+    assert approaches.free_components is None
+    found = approaches.joint_move(np.zeros(3), np.array([1.0, 0.0, 0.0]))
+    assert not found.ok and 'no collision-free joint move found' in found.reason
+
+
+def test_the_grid_never_separates_configurations_a_certified_move_joins():
+    """Soundness of the proof that no joint move exists, on random disks."""
+    rng = np.random.default_rng(5)
+    proved, joined, colliding = 0, 0, 0
+    for _ in range(8):
+        disks = [(tuple(rng.uniform(-2.5, 2.5, 2)), float(rng.uniform(0.1, 0.4)))
+                 for _ in range(int(rng.integers(1, 6)))]
+        scene = paper_scene(obstacles=disks)
+        approaches = planner_for(scene, margin=0.01)
+        components = approaches.free_components
+        starts = rng.uniform(-np.pi, np.pi, (60, 3))
+        ends = starts + rng.normal(0.0, 0.6, starts.shape)
+        for a, b in zip(starts, ends, strict=True):
+            separated = components.separated(a, b)
+            proved += separated
+            if approaches.certify(np.stack([a, b])):
+                joined += 1
+                assert not separated, (disks, a, b)
+        # A configuration kept apart from itself lies in a cell that surely collides.
+        alone = [c for c in starts if components.separated(c, c)]
+        if alone:
+            clearance = CollisionChecker(scene.robot, scene.obstacles).min_clearance(
+                np.array(alone))
+            assert np.all(clearance <= 0.01)
+            colliding += len(alone)
+    assert joined > 100 and proved > 20 and colliding > 5
 
 
 def test_with_a_joint_locked_the_path_to_the_goal_holds_it_exactly():

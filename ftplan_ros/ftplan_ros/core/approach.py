@@ -33,11 +33,13 @@ import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
+from functools import cached_property
 
 import numpy as np
 
 from .angles import configuration_difference
 from .collision import CollisionChecker
+from .free_components import GRID_CELLS, FreeComponents
 from .manifolds import (
     ManifoldOptions,
     mark_obstacle_free,
@@ -230,7 +232,8 @@ class ApproachPlanner:
         """Find a certified joint move from q to target (plus whole turns), `locked` held.
 
         Straight moves first (periodic joints may turn either way), then RRT-Connect in
-        the other joints, `rrt_attempts` times, towards every end of those moves at once.
+        the other joints, `rrt_attempts` times, towards every end of those moves at once;
+        without a lock, not where `free_components` proves that no joint move exists.
         """
         q = np.asarray(q, dtype=float)
         ends = straight_move_ends(q, np.asarray(target, dtype=float), self.robot.periodic,
@@ -243,6 +246,11 @@ class ApproachPlanner:
         ends = [end for end in ends if self._valid(end)]
         if not ends:
             return Approach(None, Route.NONE, 'the target configuration collides')
+        if locked is None and self.free_components is not None and all(
+                self.free_components.separated(q, end) for end in ends):
+            return Approach(None, Route.NONE, 'no collision-free joint move exists (proved on '
+                            f'a {GRID_CELLS}^3 joint grid: the two configurations lie in '
+                            'different components of its possibly free cells)')
         for attempt in range(self.options.rrt_attempts):
             path = self._rrt_connect(q, ends, free)
             if path is not None and self.certify(path):
@@ -252,6 +260,12 @@ class ApproachPlanner:
         return Approach(None, Route.NONE, 'no collision-free joint move found (not straight, '
                         f'not by RRT-Connect in {self.options.rrt_attempts} x '
                         f'{self.options.rrt_time:g} s)')
+
+    @cached_property
+    def free_components(self) -> FreeComponents | None:
+        """The grid that proves joint moves impossible, where it applies (else None)."""
+        return FreeComponents.where_it_applies(self.checker.robot, self.checker.obstacles,
+                                               self.options.margin)
 
     def path_to_goal(self, q: np.ndarray, x_g: np.ndarray, locked: int) -> Approach:
         """Find a certified path from q to a configuration reaching x_g, joint `locked` held.
