@@ -318,6 +318,10 @@ def test_label_components_finds_the_components_round_the_torus():
         assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]), trial
         chosen = rng.random(labels.max() + 1) < 0.5
         assert np.array_equal(cells_of(labels, chosen), chosen[labels])
+    for shape in ((0, 3, 3), (3, 3, 0)):  # no cell: no component, and no write outside
+        assert label_components(np.zeros(shape, bool), np.ones(3, bool)).shape == shape
+    with pytest.raises(ValueError, match='need 2 choices'):
+        cells_of(label_components(np.ones((4, 4, 4), bool), np.zeros(3, bool)), np.array([False]))
 
 
 # G from both sides ----------------------------------------------------------------------

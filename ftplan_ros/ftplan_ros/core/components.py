@@ -25,7 +25,9 @@ def label_components(mask: np.ndarray, periodic: np.ndarray,
     """
     mask = np.ascontiguousarray(mask, dtype=np.bool_)
     across = tuple(sorted(across))
-    labels = np.empty(mask.shape, dtype=np.int32)
+    labels = np.zeros(mask.shape, dtype=np.int32)
+    if mask.size == 0:
+        return labels
     _label(mask.ravel(), np.array(mask.shape, dtype=np.int64), _earlier_neighbours(across),
            np.array([axis in across and bool(periodic[axis]) for axis in range(3)]),
            np.array(across, dtype=np.int64), labels.ravel())
@@ -43,6 +45,9 @@ def cells_of(labels: np.ndarray, chosen: np.ndarray) -> np.ndarray:
     The same as `chosen[labels]`, in a compiled loop (numpy's gather by int32 labels is
     slower by about three times).
     """
+    if labels.size and not 0 <= labels.min() <= labels.max() < len(chosen):
+        raise ValueError(f'labels 0..{labels.max()} need {labels.max() + 1} choices, '
+                         f'got {len(chosen)}')
     out = np.empty(labels.shape, dtype=np.bool_)
     _gather(np.ascontiguousarray(chosen, dtype=np.bool_), np.ascontiguousarray(labels).ravel(),
             out.ravel())
