@@ -181,17 +181,16 @@ def _join_round(mask, shape, strides, wrap, across, axis, parent, labels):
             if not mask[f]:
                 continue
             for du in range(-reach_b, reach_b + 1):
-                x = u + du
-                if wrap[b]:
-                    x %= shape[b]
-                elif x < 0 or x >= shape[b]:
-                    continue
+                x = _index_along(u + du, shape[b], wrap[b])
                 for dv in range(-reach_c, reach_c + 1):
-                    y = v + dv
-                    if wrap[c]:
-                        y %= shape[c]
-                    elif y < 0 or y >= shape[c]:
-                        continue
-                    g = x * strides[b] + y * strides[c]
-                    if mask[g]:
-                        _join(parent, labels[f], labels[g])
+                    y = _index_along(v + dv, shape[c], wrap[c])
+                    if x >= 0 and y >= 0 and mask[x * strides[b] + y * strides[c]]:
+                        _join(parent, labels[f], labels[x * strides[b] + y * strides[c]])
+
+
+@numba.njit(cache=True)
+def _index_along(index, size, wrap):
+    """Return `index` on an axis of `size` cells, wrapped round if `wrap`; -1 if off it."""
+    if wrap:
+        return index % size
+    return index if 0 <= index < size else -1
