@@ -118,9 +118,9 @@ def test_a_pocket_the_arm_cannot_leave_gives_no_approach_and_says_why():
 
 
 def test_the_grid_never_separates_configurations_a_certified_move_joins():
-    """Soundness of the proof that no joint move exists, on random disks."""
+    """Soundness of the proof that no joint move exists, on random disks, a joint held or not."""
     rng = np.random.default_rng(5)
-    proved, joined, colliding = 0, 0, 0
+    proved, proved_held, joined, colliding = 0, 0, 0, 0
     for _ in range(8):
         disks = [(tuple(rng.uniform(-2.5, 2.5, 2)), float(rng.uniform(0.1, 0.4)))
                  for _ in range(int(rng.integers(1, 6)))]
@@ -129,12 +129,16 @@ def test_the_grid_never_separates_configurations_a_certified_move_joins():
         components = approaches.free_components
         starts = rng.uniform(-np.pi, np.pi, (60, 3))
         ends = starts + rng.normal(0.0, 0.6, starts.shape)
-        for a, b in zip(starts, ends, strict=True):
-            separated = components.separated(a, b)
+        for n, (a, b) in enumerate(zip(starts, ends, strict=True)):
+            held = None if n % 3 == 0 else n % 3  # joint 2 or 3 held in 2 pairs of 3
+            if held is not None:
+                b[held] = a[held]
+            separated = components.separated(a, b, held)
             proved += separated
+            proved_held += separated and held is not None
             if approaches.certify(np.stack([a, b])):
                 joined += 1
-                assert not separated, (disks, a, b)
+                assert not separated, (disks, a, b, held)
         # A configuration kept apart from itself lies in a cell that surely collides.
         alone = [c for c in starts if components.separated(c, c)]
         if alone:
@@ -142,7 +146,7 @@ def test_the_grid_never_separates_configurations_a_certified_move_joins():
                 np.array(alone))
             assert np.all(clearance <= 0.01)
             colliding += len(alone)
-    assert joined > 100 and proved > 20 and colliding > 5
+    assert joined > 100 and proved > 20 and proved_held > 10 and colliding > 5
 
 
 def test_with_a_joint_locked_the_path_to_the_goal_holds_it_exactly():

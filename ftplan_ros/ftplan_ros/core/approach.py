@@ -233,7 +233,7 @@ class ApproachPlanner:
 
         Straight moves first (periodic joints may turn either way), then RRT-Connect in
         the other joints, `rrt_attempts` times, towards every end of those moves at once;
-        without a lock, not where `free_components` proves that no joint move exists.
+        not where `free_components` proves that no joint move exists.
         """
         q = np.asarray(q, dtype=float)
         ends = straight_move_ends(q, np.asarray(target, dtype=float), self.robot.periodic,
@@ -246,8 +246,8 @@ class ApproachPlanner:
         ends = [end for end in ends if self._valid(end)]
         if not ends:
             return Approach(None, Route.NONE, 'the target configuration collides')
-        if locked is None and self.free_components is not None and all(
-                self.free_components.separated(q, end) for end in ends):
+        if self.free_components is not None and all(
+                self.free_components.separated(q, end, locked) for end in ends):
             return Approach(None, Route.NONE, 'no collision-free joint move exists (proved on '
                             f'a {GRID_CELLS}^3 joint grid: the two configurations lie in '
                             'different components of its possibly free cells)')

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .components import label_components
+from .components import label_components, layer_labels
 from .robot import Robot
 from .scene import Obstacle, Scene
 from .tolerant_set import classify_cells, supports
@@ -29,13 +29,18 @@ GRID_CELLS = 64
 class FreeComponents:
     """The components of the possibly free cells of a joint grid over the robot's joints.
 
-    Free means clear of the obstacles by more than `margin` [m].
+    Free means clear of the obstacles by more than `margin` [m]. With a joint held, a
+    path stays in its failure plane, which lies in the closed layer of cells holding the
+    held value: the components of that layer's possibly free cells (8 neighbours in the
+    layer) decide instead.
     """
 
     def __init__(self, scene: Scene, cells: int = GRID_CELLS, margin: float = 0.0):
         classes = classify_cells(scene, cells, margin=margin)
         self.lattice = classes.lattice
+        self.possible = classes.possible
         self.labels = label_components(classes.possible, self.lattice.periodic)
+        self._layers: dict[int, np.ndarray] = {}
 
     @classmethod
     def where_it_applies(cls, robot: Robot, obstacles: Sequence[Obstacle],
@@ -44,16 +49,26 @@ class FreeComponents:
         scene = Scene(robot, tuple(obstacles))
         return cls(scene, margin=margin) if supports(scene) else None
 
-    def separated(self, a: np.ndarray, b: np.ndarray) -> bool:
+    def separated(self, a: np.ndarray, b: np.ndarray, held: int | None = None) -> bool:
         """Whether no path clear by more than the margin joins configurations a and b [rad].
 
-        True only when proved: their cells lie in different components, or one of them
-        collides. False when a path may exist, and for configurations that are not
+        With `held`, only paths that keep that joint at a's angle count (b must have it
+        too). True only when proved: their cells lie in different components, or one of
+        them collides. False when a path may exist, and for configurations that are not
         finite or lie outside the joint limits.
         """
         points = np.array([a, b], dtype=float)
         if not np.all(np.isfinite(points)) or not np.all(self.lattice.inside(points)):
             return False
+        if held is not None and points[0, held] != points[1, held]:
+            return False
         cells = self.lattice.cell_of(points)
-        first, second = self.labels[tuple(cells.T)]
+        labels = self.labels if held is None else self._layer_labels(held)
+        first, second = labels[tuple(cells.T)]
         return bool(first == 0 or second == 0 or first != second)
+
+    def _layer_labels(self, joint: int) -> np.ndarray:
+        """Return the components of each θ_joint-layer's possibly free cells (cached)."""
+        if joint not in self._layers:
+            self._layers[joint] = layer_labels(self.possible, joint, self.lattice.periodic)
+        return self._layers[joint]
