@@ -1,11 +1,18 @@
 """Joint angles on the torus: wrapping to (-π, π] for joints without limits."""
 
+import numba
 import numpy as np
 
 
 def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
     """Wrap angles [rad] to (-π, π]."""
     return np.pi - np.mod(np.pi - np.asarray(angle, dtype=float), 2.0 * np.pi)
+
+
+@numba.njit(cache=True, inline='always')
+def wrap_one(angle):
+    """`wrap_angle` of one angle [rad], compiled: for numba kernels."""
+    return np.pi - (np.pi - angle) % (2.0 * np.pi)
 
 
 def wrap_configuration(thetas: np.ndarray, periodic: np.ndarray) -> np.ndarray:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from .angles import wrap_one
 from .kernels import task_residual
 
 # How a trace ended (the `status` of `trace_curve`).
@@ -30,7 +31,7 @@ def _wrapped_difference(a, b, periodic):
     diff = a - b
     for k in range(diff.shape[0]):
         if periodic[k]:
-            diff[k] = np.pi - ((np.pi - diff[k]) % (2.0 * np.pi))
+            diff[k] = wrap_one(diff[k])
     return diff
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .angles import wrap_angle
+from .angles import wrap_angle, wrap_one
 from .manifolds import SelfMotionManifold, project_to_preimage
 from .robot import Robot
 
@@ -83,11 +83,11 @@ def _crossings(values, levels, periodic):
     for c in range(levels.shape[0]):
         before = values[0] - levels[c]
         if periodic:
-            before = np.pi - (np.pi - before) % (2.0 * np.pi)
+            before = wrap_one(before)
         for k in range(1, count):
             after = values[k] - levels[c]
             if periodic:
-                after = np.pi - (np.pi - after) % (2.0 * np.pi)
+                after = wrap_one(after)
             if (before < 0.0) != (after < 0.0) and (not periodic or abs(after - before) < np.pi):
                 out[c, k - 1] = True
             before = after
