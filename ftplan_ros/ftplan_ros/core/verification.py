@@ -95,100 +95,78 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
     samples = 0
     if not np.all(np.isfinite(corners)):
         return False, int(np.flatnonzero(~np.isfinite(corners).all(axis=(1, 2)))[0]), np.nan, 0
-    if checker.planar_disks is not None and len(corners):
-        ok, failed, smallest, samples = _certify_planar(
-            np.ascontiguousarray(corners, dtype=float), *checker.planar_disks, arms, margin,
-            max_depth, _ROUNDING)
-        checker.checks += samples
-        return bool(ok), int(failed), float(smallest), int(samples)
     for _ in range(max_depth + 1):
         if len(corners) == 0:
             return True, -1, float(smallest), samples
-        centroids = corners.mean(axis=1)
-        spread = np.max(np.abs(corners - centroids[:, None, :]), axis=1)  # (S, n)
-        motion = spread @ arms.T  # (S, C): how far each channel can change inside the simplex
-        clearance = checker.clearance(centroids, needed=margin + motion + _ROUNDING)
-        samples += len(centroids)
-        smallest = min(smallest, float(clearance.min()))
-        hit = np.flatnonzero(np.any(~(clearance > margin), axis=1))  # NaN counts as a hit
-        if len(hit):
-            return False, int(roots[hit[0]]), float(smallest), samples
-        open_ = np.flatnonzero(np.any(~(clearance - margin > motion + _ROUNDING), axis=1))
-        corners, roots = _split(corners[open_]), np.repeat(roots[open_], _pieces(corners))
+        hit, opened, least = _measure_level(checker, corners, arms, margin)
+        samples += len(corners)
+        smallest = min(smallest, least)
+        if hit >= 0:
+            return False, int(roots[hit]), float(smallest), samples
+        corners, roots = _split(corners[opened]), np.repeat(roots[opened], _pieces(corners))
     if len(corners) == 0:
         return True, -1, float(smallest), samples
     return False, int(roots[0]), float(smallest), samples
 
 
-@numba.njit(cache=True)
-def _certify_planar(corners, lengths, link_radius, centres, radii, cap, arms, margin,
-                    max_depth, rounding):
-    """`certify_simplices` for a planar chain among spheres (`CollisionChecker.planar_disks`).
+def _measure_level(checker: CollisionChecker, corners: np.ndarray, arms: np.ndarray,
+                   margin: float) -> tuple[int, np.ndarray, float]:
+    """Measure each simplex (S, c, n) of a level at its centroid.
 
-    The same levels, tests and splits, compiled: no clearance array per level.
+    Returns the first simplex whose centroid is not clear by more than `margin` [m] (-1
+    if none), which simplices (S,) bool the lever bound leaves open (to split), and the
+    smallest clearance [m]. A planar chain among spheres is measured in one compiled
+    pass (`CollisionChecker.planar_disks`).
     """
+    if checker.planar_disks is not None:
+        checker.checks += len(corners)
+        hit, opened, least = _measure_planar(np.ascontiguousarray(corners, dtype=float),
+                                             *checker.planar_disks, arms, margin, _ROUNDING)
+        return int(hit), opened, float(least)
+    centroids = corners.mean(axis=1)
+    spread = np.max(np.abs(corners - centroids[:, None, :]), axis=1)  # (S, n)
+    motion = spread @ arms.T  # (S, C): how far each channel can change inside the simplex
+    clearance = checker.clearance(centroids, needed=margin + motion + _ROUNDING)
+    hit = np.flatnonzero(np.any(~(clearance > margin), axis=1))  # NaN counts as a hit
+    opened = np.any(~(clearance - margin > motion + _ROUNDING), axis=1)
+    return (int(hit[0]) if len(hit) else -1), opened, float(clearance.min())
+
+
+@numba.njit(cache=True)
+def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, margin,
+                    rounding):
+    """`_measure_level` for a planar chain among spheres, compiled: no clearance array."""
     count, c, n = corners.shape
-    pieces = 2 if c == 2 else 4
-    level = corners.copy()
-    roots = np.arange(count)
     smallest = np.inf
-    samples = 0
+    first_hit = -1
+    opened = np.zeros(count, dtype=np.bool_)
     points = np.zeros((n + 1, 2))
     centroid = np.empty(n)
     spread = np.empty(n)
-    for _ in range(max_depth + 1):
-        if level.shape[0] == 0:
-            return True, -1, smallest, samples
-        opened = np.zeros(level.shape[0], dtype=np.bool_)
-        first_hit = -1
-        for s in range(level.shape[0]):
+    for s in range(count):
+        for a in range(n):
+            total = 0.0
+            for v in range(c):
+                total += corners[s, v, a]
+            centroid[a] = total / c
+        for a in range(n):
+            worst = 0.0
+            for v in range(c):
+                worst = max(worst, abs(corners[s, v, a] - centroid[a]))
+            spread[a] = worst
+        planar_joint_points(lengths, centroid, points)
+        for k in range(n):
+            clearance = min(segment_disk_clearance(points[k], points[k + 1], centres, radii)
+                            - link_radius, cap)
+            smallest = min(smallest, clearance)
+            if not clearance > margin and first_hit < 0:  # NaN counts as a hit
+                first_hit = s
+            motion = 0.0
             for a in range(n):
-                total = 0.0
-                for v in range(c):
-                    total += level[s, v, a]
-                centroid[a] = total / c
-            for a in range(n):
-                worst = 0.0
-                for v in range(c):
-                    worst = max(worst, abs(level[s, v, a] - centroid[a]))
-                spread[a] = worst
-            planar_joint_points(lengths, centroid, points)
-            samples += 1
-            for k in range(n):
-                clearance = min(segment_disk_clearance(points[k], points[k + 1], centres, radii)
-                                - link_radius, cap)
-                smallest = min(smallest, clearance)
-                if not clearance > margin and first_hit < 0:  # NaN counts as a hit
-                    first_hit = s
-                motion = 0.0
-                for a in range(n):
-                    motion += spread[a] * arms[k, a]
-                if not clearance - margin > motion + rounding:
-                    opened[s] = True
-        if first_hit >= 0:
-            return False, roots[first_hit], smallest, samples
-        chosen = np.flatnonzero(opened)
-        following = np.empty((len(chosen) * pieces, c, n))
-        origins = np.empty(len(chosen) * pieces, dtype=np.int64)
-        for q in range(len(chosen)):
-            s = chosen[q]
-            at = q * pieces
-            origins[at:at + pieces] = roots[s]
-            if c == 2:
-                middle = 0.5 * (level[s, 0] + level[s, 1])
-                following[at, 0], following[at, 1] = level[s, 0], middle
-                following[at + 1, 0], following[at + 1, 1] = middle, level[s, 1]
-                continue
-            a, b, d = level[s, 0], level[s, 1], level[s, 2]
-            ab, bc, ca = 0.5 * (a + b), 0.5 * (b + d), 0.5 * (d + a)
-            following[at, 0], following[at, 1], following[at, 2] = a, ab, ca
-            following[at + 1, 0], following[at + 1, 1], following[at + 1, 2] = ab, b, bc
-            following[at + 2, 0], following[at + 2, 1], following[at + 2, 2] = ca, bc, d
-            following[at + 3, 0], following[at + 3, 1], following[at + 3, 2] = ab, bc, ca
-        level, roots = following, origins
-    if level.shape[0] == 0:
-        return True, -1, smallest, samples
-    return False, roots[0], smallest, samples
+                motion += spread[a] * arms[k, a]
+            if not clearance - margin > motion + rounding:
+                opened[s] = True
+    return first_hit, opened, smallest
 
 
 def goal_row_error(robot: Robot, task: Task, goal_points: np.ndarray, samples: int,
