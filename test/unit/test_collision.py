@@ -23,6 +23,9 @@ from ftplan_ros.core.distance_kernels import (
     CODES,
     CYLINDER,
     SPHERE,
+    link_box_clearance,
+    planar_joint_points,
+    planar_link_clearances,
     segment_distance,
     segment_signed_distance,
 )
@@ -246,6 +249,32 @@ def test_planar_spheres_against_the_segments_by_brute_force(rng):
             points = joints[j] + t * (joints[j + 1] - joints[j])
             expected = min(distance_to_obstacle(ob, points).min() for ob in obstacles) - 0.07
             assert expected - 5e-4 <= row[j] <= expected + 1e-9  # samples 0.5 mm apart
+
+
+@pytest.mark.parametrize('links', [(1.0, 1.0, 1.0), (0.7, 1.2, 0.5, 0.9)])
+def test_link_box_clearance_is_below_every_configuration_of_the_box(links, rng):
+    """A lower bound over the box, by dense sampling; tight for tiny boxes."""
+    lengths = np.array(links)
+    n = len(lengths)
+    centres = np.hstack([rng.uniform(-2.5, 2.5, (8, 2)), rng.uniform(-0.3, 0.3, (8, 1))])
+    radii = rng.uniform(0.05, 0.4, 8)
+    points = np.zeros((n + 1, 2))
+    closest = np.inf
+    for _ in range(150):
+        centre = rng.uniform(-np.pi, np.pi, n)
+        half = rng.uniform(0.0, 0.4, n) * rng.choice([1e-4, 1.0])
+        planar_joint_points(lengths, centre, points)
+        corners = centre + half * rng.uniform(-1.0, 1.0, (3000, n))
+        corners[:2] = centre + half * np.array([1.0, -1.0])[:, None]  # two opposite corners
+        sampled = planar_link_clearances(lengths, 0.0, centres, radii, corners).min(axis=0)
+        for k in range(n):
+            bound = link_box_clearance(points, k, lengths[k], centre[:k + 1].sum(), half,
+                                       centres, radii)
+            assert bound <= sampled[k], (k, centre, half)
+            if half.max() < 1e-3:
+                closest = min(closest, sampled[k] - bound)
+                assert sampled[k] - bound < 1e-3, (k, centre, half)
+    assert closest < 1e-4
 
 
 # Tier 1: closed forms with a sphere -----------------------------------------------------

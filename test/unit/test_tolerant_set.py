@@ -22,6 +22,8 @@ from ftplan_ros.core.robot import PlanarChain
 from ftplan_ros.core.scene import Obstacle
 from ftplan_ros.core.tolerant_set import (
     JointLattice,
+    _arc_half_width,
+    _mark_cells,
     classify_cells,
     disk_arrays,
     link_lever_arms,
@@ -244,19 +246,64 @@ def test_triangle_free_with_a_margin_keeps_the_margin():
     assert passed > 20
 
 
+def segment_distances(distance, length, directions):
+    """Distances [m] from the point (distance, 0) to segments from the origin (densely)."""
+    along = np.linspace(0.0, length, 801)
+    x = along[None, :] * np.cos(directions)[:, None] - distance
+    y = along[None, :] * np.sin(directions)[:, None]
+    return np.sqrt(x * x + y * y).min(axis=1)
+
+
+def test_the_arc_of_directions_that_reach_a_disk_is_the_sampled_one():
+    """Inside the half width every direction comes within reach; outside, none does."""
+    rng = np.random.default_rng(21)
+    directions = np.linspace(-np.pi, np.pi, 4001)
+    kinds = set()
+    for _ in range(300):
+        distance, length = rng.uniform(0.05, 2.5), rng.uniform(0.2, 1.5)
+        reach = rng.uniform(0.0, 0.8)
+        width = _arc_half_width(distance, length, reach * reach)
+        gaps = segment_distances(distance, length, directions)
+        slack = 1e-3 * length  # the segments are sampled every length / 800
+        if width < 0.0:
+            kinds.add('none')
+            assert gaps.min() > reach - slack
+            continue
+        kinds.add('full' if width >= np.pi else 'arc')
+        assert np.all(gaps[np.abs(directions) < width - 1e-3] <= reach + slack)
+        assert np.all(gaps[np.abs(directions) > width + 1e-3] > reach - slack)
+    assert kinds == {'none', 'full', 'arc'}
+    assert _arc_half_width(1.0, 1.0, -0.01) < 0.0  # a sphere that stays off the plane
+
+
+def test_marked_cells_are_the_cells_whose_direction_lies_in_the_arc():
+    rng = np.random.default_rng(22)
+    for _ in range(400):
+        cells = int(rng.integers(1, 40))
+        step = rng.uniform(0.5, 1.5) * 2.0 * np.pi / cells
+        base, toward = rng.uniform(-8.0, 8.0), rng.uniform(-4.0, 4.0)
+        width = rng.uniform(0.0, 4.0)
+        counts = np.zeros(cells + 1, dtype=np.int64)
+        _mark_cells(counts, toward, width, base, step)
+        marked = np.cumsum(counts)[:cells]
+        off = np.abs(wrapped(base + (np.arange(cells) + 0.5) * step - toward))
+        assert np.all(marked[off < width - 1e-9] == 1)
+        assert np.all(marked[off > width + 1e-9] == 0)
+
+
 def sample_cells(lattice, cells, per_cell, rng):
     """Random configurations (c·per_cell, 3) [rad] inside the cells (c, 3)."""
     offsets = rng.random((len(cells), per_cell, 3))
     return (lattice.lower + (cells[:, None, :] + offsets) * lattice.step).reshape(-1, 3)
 
 
-@pytest.mark.parametrize('radius, margin, height', [(0.0, 0.0, 0.0), (0.05, 0.0, 0.0),
-                                                    (0.0, 0.08, 0.0), (0.05, 0.0, 0.3)])
-def test_cell_classes_hold_for_every_configuration_sampled(radius, margin, height):
+@pytest.mark.parametrize('radius, margin, height, cells', [
+    (0.0, 0.0, 0.0, 64), (0.05, 0.0, 0.0, 48), (0.0, 0.08, 0.0, 37), (0.05, 0.0, 0.3, 64)])
+def test_cell_classes_hold_for_every_configuration_sampled(radius, margin, height, cells):
     scene = disk_scene(radius, disks=((1.3, 0.8, 0.45), (-0.5, 1.5, 0.3), (0.9, -1.1, 0.4)),
                        height=height)
     checker = CollisionChecker(scene.robot, scene.obstacles, backend='fcl')  # posed frames
-    classes = classify_cells(scene, 64, margin=margin)
+    classes = classify_cells(scene, cells, margin=margin)
     rng = np.random.default_rng(8)
     certified = np.argwhere(classes.certified)
     surely_hit = np.argwhere(~classes.possible)
@@ -268,11 +315,6 @@ def test_cell_classes_hold_for_every_configuration_sampled(radius, margin, heigh
                              rng)
     assert checker.min_clearance(colliding).max() <= margin
     assert np.all(classes.certified <= classes.possible)
-
-
-def test_cells_must_be_the_coarsest_times_a_power_of_two():
-    with pytest.raises(ValueError, match='power of two'):
-        classify_cells(disk_scene(), 48)
 
 
 # Components -----------------------------------------------------------------------------

@@ -51,7 +51,8 @@ def test_certified_triangles_never_collide_under_dense_sampling():
 
 
 @pytest.mark.parametrize('corner_count', [2, 3])
-def test_the_compiled_planar_certificate_is_the_general_one(corner_count):
+def test_the_compiled_planar_certificate_is_sound_and_at_least_the_general_one(corner_count):
+    """The compiled pass adds a tighter bound (link_box_clearance) to the general one's."""
     obstacles = [Obstacle('sphere', (1.3, 0.8, 0.0), radius=0.25),
                  Obstacle('sphere', (-0.5, 1.5, 0.1), radius=0.3),
                  Obstacle('sphere', (30.0, 0.0, 0.0), radius=1.0)]  # culled: caps the clearance
@@ -59,17 +60,21 @@ def test_the_compiled_planar_certificate_is_the_general_one(corner_count):
     general = CollisionChecker(replace(ARM, link_radius=0.05), obstacles, backend='fcl')
     assert compiled.planar_disks is not None and general.planar_disks is None
     rng = np.random.default_rng(12)
-    outcomes = set()
+    outcomes, fewer = set(), 0
     for trial in range(80):
         centres = rng.uniform(-np.pi, np.pi, (6, 1, 3))
         corners = centres + rng.uniform(-0.2, 0.2, (6, corner_count, 3))
         margin = 0.0 if trial % 2 else 0.05
-        ok, failed, smallest, samples = certify_simplices(compiled, corners, margin, 5)
+        ok, _, smallest, samples = certify_simplices(compiled, corners, margin, 5)
         expected = certify_simplices(general, corners, margin, 5)
-        assert (ok, failed, samples) == (expected[0], expected[1], expected[3])
-        assert smallest == pytest.approx(expected[2], abs=1e-12)
+        assert ok or not expected[0]
+        assert samples <= expected[3] and smallest >= expected[2] - 1e-12
+        fewer += samples < expected[3]
+        if ok:
+            points = np.vstack([dense_triangle_points(np.vstack([c, c[-1:]])) for c in corners])
+            assert general.min_clearance(points).min() > margin
         outcomes.add(ok)
-    assert outcomes == {True, False}
+    assert outcomes == {True, False} and fewer > 10
 
 
 def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():

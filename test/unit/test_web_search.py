@@ -25,9 +25,10 @@ from ftplan_ros.crowded import RADII, crowded_scene
 
 HALF_DEGREE = np.radians(0.5)
 # crowded_scene(default_rng(seed), disks=6, attempts=12, cells=64) for these seeds leaves
-# the paper's surface without a plan while the recovery sheets find one (found by trying
-# seeds 0-29; 1, 3, 15, 16, 18, 22, 23 and 25-27 behave alike).
-SHEET_SEEDS = (12, 19, 20)
+# the paper's surface without a plan while the recovery sheets find one, with at least
+# four disks and a web that leaves the paper's hypercube (found by trying seeds 0-29; 23
+# and 25-27 behave alike).
+SHEET_SEEDS = (1, 20, 22)
 CHEAP = {'disks': 6, 'attempts': 12, 'cells': 64}
 
 

@@ -25,6 +25,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from .angles import wrap_one
+
 SPHERE, BOX, CYLINDER, CAPSULE, MESH = 0, 1, 2, 3, 4
 CODES = {'sphere': SPHERE, 'box': BOX, 'cylinder': CYLINDER, 'capsule': CAPSULE, 'mesh': MESH}
 
@@ -343,6 +345,52 @@ def segment_disk_clearance(a, b, centres, radii):
     best = np.inf
     for p in range(centres.shape[0]):
         best = min(best, np.sqrt(segment_gap2(a, b, centres[p])) - radii[p])
+    return best
+
+
+@numba.njit(cache=True, inline='always')
+def sphere_drift(points, k, cx, cy, half):
+    """How far [m] a point (cx, cy) [m] moves relative to link k as joints a < k turn.
+
+    Each turns by at most `half[a]` [rad] about its joint `points[a]` (points (n+1, 2)):
+    d_{a+1} = d_a + (|c - p_a| + d_a) h_a.
+    """
+    drift = 0.0
+    for a in range(k):
+        drift += (np.sqrt((cx - points[a, 0]) ** 2 + (cy - points[a, 1]) ** 2) + drift) * half[a]
+    return drift
+
+
+@numba.njit(cache=True)
+def link_box_clearance(points, k, length, direction, half, centres, radii):
+    """Lower bound [m] on the distance from link k's segment to the spheres over a box.
+
+    The box holds joint angles within `half` (n,) [rad] of its centre, where the chain's
+    joints are `points` (n+1, 2) [m] and link k (of `length` [m]) points along
+    `direction` [rad]. Turning joints a < k moves link k as turning a sphere back about
+    the joints p_{k-1}, ..., p_0 would move the sphere: its centre c drifts by at most
+    d_k, d_{a+1} = d_a + (|c - p_a| + d_a) h_a. Turning joint k sweeps the segment over a
+    fan of half angle h_k about p_k, whose distance to c is exact: the fan's direction
+    nearest c's. So each sphere is at least (fan distance) - d_k - radius away.
+    """
+    best = np.inf
+    for p in range(centres.shape[0]):
+        cx, cy = centres[p, 0], centres[p, 1]
+        drift = sphere_drift(points, k, cx, cy, half)
+        dx, dy = cx - points[k, 0], cy - points[k, 1]
+        distance = np.sqrt(dx * dx + dy * dy)
+        turn = abs(wrap_one(np.arctan2(dy, dx) - direction)) - half[k]
+        if turn <= 0.0:
+            planar = max(0.0, distance - length)
+        elif turn >= 0.5 * np.pi:
+            planar = distance
+        elif distance * np.cos(turn) <= length:
+            planar = distance * np.sin(turn)
+        else:
+            planar = np.sqrt(max(0.0, distance * distance + length * length
+                                 - 2.0 * distance * length * np.cos(turn)))
+        gap = np.sqrt(planar * planar + centres[p, 2] * centres[p, 2])
+        best = min(best, gap - radii[p] - drift - 1e-9)
     return best
 
 

@@ -7,15 +7,19 @@ of its failure plane {θ_i = const}. A failure-tolerant plan exists exactly when
 G joins a start configuration (on M_s, obstacle-free) to a goal configuration.
 
 The joint space is cut into N^3 closed cells. A cell's clearance channels (one per link:
-the capsule's distance to the nearest disk, exact) change inside it by at most the lever
-bound Σ_a R[k, a] · h_a (h the half widths; `link_lever_arms`), so each cell is
+the capsule's distance to the nearest disk, exact) change inside it by at most a bound,
+so each cell is
 
 * certified free when every channel at its centre exceeds the bound (every configuration
   in the closed cell is free), and
 * possibly free unless some channel at its centre is below minus the bound (then every
   configuration in the cell collides).
 
-Cells are classified coarse to fine: a coarse cell that is certain is not split.
+For links 1 and 2 the bound is the better of the lever bound Σ_a R[k, a] · h_a (h the
+half widths; `link_lever_arms`) and `link_box_clearance` (the disks turned back about the
+joints before the link, the link's own turn exact). The last link is measured the second
+way for every θ_3 cell of a (θ_1, θ_2) cell at once: per disk, the arc of directions in
+which it may reach the disk from the wrist (`_classify`).
 
 For joint i, the cells with the same θ_i-index form a layer (a slab of locked values). In
 a layer, the free part of every failure plane {θ_i = v}, v in the slab, is
@@ -45,13 +49,21 @@ import numba
 import numpy as np
 
 from .components import cells_of, layer_labels
-from .distance_kernels import planar_joint_points, segment_disk_clearance, segment_gap2
+from .distance_kernels import (
+    link_box_clearance,
+    planar_joint_points,
+    segment_disk_clearance,
+    segment_gap2,
+    sphere_drift,
+)
 from .errors import InputError
 from .robot import PlanarChain
 from .scene import Scene
 
 # [m] every clearance bound gives this much away to float rounding
 _ROUNDING = 1e-9
+# [rad] every arc gives this much away to the rounding of arcsin and arccos near 1
+_ANGLE_ROUNDING = 1e-6
 
 
 def supports(scene: Scene) -> bool:
@@ -108,12 +120,16 @@ def _link_status(lengths, link_radius, centres, radii, arms, theta, half, k, poi
     the cell a point of link k moves by at most Σ_a h_a (d_ka + Σ_b R[k, b] h_b), d_ka the
     farthest end of link k from joint a at the centre: the first term is its lever arm
     there, the second how much the cell can stretch it. Only joints 0..k count, so the
-    status depends on the cell's extent in those joints alone. `points` (n+1, 2) is
-    scratch space.
+    status depends on the cell's extent in those joints alone. An unsure link is free
+    still when `link_box_clearance` says so. `points` (n+1, 2) is scratch space.
     """
     planar_joint_points(lengths, theta, points)
-    return _segment_status(points[k], points[k + 1], centres, radii, link_radius,
-                           _link_motion_bound(points, arms, half, k))
+    status = _segment_status(points[k], points[k + 1], centres, radii, link_radius,
+                             _link_motion_bound(points, arms, half, k))
+    if status == 2 and link_box_clearance(points, k, lengths[k], theta[:k + 1].sum(), half,
+                                          centres, radii) > link_radius:
+        return 1
+    return status
 
 
 @numba.njit(cache=True)
@@ -135,123 +151,123 @@ def _segment_status(a, b, centres, radii, link_radius, bound):
 
 
 @numba.njit(cache=True)
-def _fine_link_tables(lengths, link_radius, centres, radii, arms, lower, step, cells):
-    """Statuses of links 1 (N,) and 2 (N, N) over the fine cells of the joints that move them."""
-    n = lengths.shape[0]
-    points = np.zeros((n + 1, 2))
-    theta = np.zeros(n)
-    half = 0.5 * step
-    first = np.empty(cells, dtype=np.int8)
-    second = np.empty((cells, cells), dtype=np.int8)
-    for i in range(cells):
-        theta[0] = lower[0] + (i + 0.5) * step[0]
-        first[i] = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 0,
-                                points)
-        for j in range(cells):
-            theta[1] = lower[1] + (j + 0.5) * step[1]
-            second[i, j] = _link_status(lengths, link_radius, centres, radii, arms, theta,
-                                        half, 1, points)
-    return first, second
+def _arc_half_width(distance, length, reach2):
+    """Half width [rad] of the directions in which a segment hits a disk, or -1 for none.
+
+    The segment runs `length` [m] from the origin; the disk's centre lies `distance` [m]
+    away and its radius is sqrt(`reach2`) [m] (none when `reach2` < 0). The distance from
+    the centre to the segment grows with the angle between the segment and the centre's
+    direction (it is the distance to the line while the foot lies on the segment, then to
+    the tip, then to the origin), so the directions within reach form one closed arc
+    about the centre's direction: π when the origin lies in the disk.
+    """
+    if reach2 < 0.0:
+        return -1.0
+    reach = np.sqrt(reach2)
+    if distance <= reach:
+        return np.pi
+    if distance > length + reach:
+        return -1.0
+    if distance <= length or reach2 >= distance * distance - length * length:
+        return np.arcsin(reach / distance)  # the foot on the segment at the arc's end
+    cosine = (distance * distance + length * length - reach2) / (2.0 * distance * length)
+    return np.arccos(min(1.0, cosine))  # the tip at the arc's end
 
 
 @numba.njit(cache=True)
-def _classify_octree(lengths, link_radius, centres, radii, arms, lower, step, coarsest,
-                     levels, first, second, certified, possible):
-    """Fill `certified` and `possible` (N, N, N) coarse to fine; return the cells evaluated.
+def _mark_cells(counts, toward, width, base, step):
+    """Count the cells k within `width` [rad] of the direction `toward` [rad], round the circle.
 
-    Cells of level L are N / (coarsest · 2^L) fine cells wide; `first[L]` (N,) and
-    `second[L]` (N, N) hold the statuses of links 1 and 2 over the cells of level L. A
-    cell where either surely collides is dropped; otherwise link 3 is measured at its
-    centre, and a cell still unsure is split in eight, down to the fine cells.
+    Cell k's direction is base + (k + 1/2) · step [rad]; `counts` (N + 1,) holds the
+    counts as differences (+1 at a run's first cell, -1 after its last).
+    """
+    cells = counts.shape[0] - 1
+    if width >= np.pi:
+        counts[0] += 1
+        counts[cells] -= 1
+        return
+    turn = 2.0 * np.pi
+    first = int(np.ceil((base + 0.5 * step - toward - width) / turn))
+    last = int(np.floor((base + (cells - 0.5) * step - toward + width) / turn))
+    for m in range(first, last + 1):
+        centre = toward + m * turn
+        low = max(0, int(np.ceil((centre - width - base) / step - 0.5)))
+        high = min(cells - 1, int(np.floor((centre + width - base) / step - 0.5)))
+        if low <= high:
+            counts[low] += 1
+            counts[high + 1] -= 1
+
+
+@numba.njit(cache=True)
+def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified, possible):
+    """Fill `certified` and `possible` (N, N, N) over the N^3 cells of the lattice.
+
+    Links 1 and 2 get `_link_status` over the (θ_1) and (θ_1, θ_2) cells. For link 3, a
+    turn x of joint 1 and y of joint 2 from the centre (a, b) moves the arm as turning the
+    sphere back, by -x about the base and then by -y about the elbow p_1(a), would move the
+    sphere: its centre c moves by at most |c| h_1 + (|c - p_1| + |c| h_1) h_2
+    (`sphere_drift`).
+    The wrist then stays where it is at the centre and only θ_3 turns the link, so per
+    sphere and (θ_1, θ_2) cell the directions from the wrist within reach + drift
+    (`_arc_half_width`), widened by h_3, mark the θ_3 cells that may collide, and those
+    within reach - drift, narrowed by h_3, the ones that surely do.
     """
     cells = certified.shape[0]
-    n = lengths.shape[0]
-    depth = coarsest ** 3 + 7 * levels + 1
-    stack = np.empty((depth, 4), dtype=np.int64)
-    top = 0
-    for i in range(coarsest):
-        for j in range(coarsest):
-            for k in range(coarsest):
-                stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = 0, i, j, k
-                top += 1
-    # Joints 1 and 2 at the centre of every (θ_1, θ_2) cell of every level: the base,
-    # joint 2, joint 3 (x, y) as `planar_joint_points` computes them, then the cosine
-    # and sine of θ_1 + θ_2; and those of θ_3 at every θ_3 cell. The last link's angle
-    # θ_1 + θ_2 + θ_3 then costs no cosine or sine (the sum formulas).
-    elbows = np.zeros((levels + 1, cells, cells, 8))
-    wrists = np.zeros((levels + 1, cells, 2))
-    for level in range(levels + 1):
-        size = cells // (coarsest << level)
-        for i in range(coarsest << level):
-            a = lower[0] + (i + 0.5) * size * step[0]
-            third = lower[2] + (i + 0.5) * size * step[2]
-            wrists[level, i, 0], wrists[level, i, 1] = np.cos(third), np.sin(third)
-            for j in range(coarsest << level):
-                phi = a + (lower[1] + (j + 0.5) * size * step[1])
-                row = elbows[level, i, j]
-                row[2] = lengths[0] * np.cos(a)
-                row[3] = lengths[0] * np.sin(a)
-                row[6], row[7] = np.cos(phi), np.sin(phi)
-                row[4] = row[2] + lengths[1] * row[6]
-                row[5] = row[3] + lengths[1] * row[7]
-    points = np.zeros((n + 1, 2))
-    half = np.empty(n)
-    evaluated = 0
-    while top > 0:
-        top -= 1
-        level, i, j, k = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
-        one, two = first[level, i], second[level, i, j]
-        if one == 0 or two == 0:
+    points = np.zeros((4, 2))
+    theta = np.zeros(3)
+    half = 0.5 * step
+    may_hit = np.empty(cells + 1, dtype=np.int64)
+    surely_hit = np.empty(cells + 1, dtype=np.int64)
+    for i in range(cells):
+        theta[0] = lower[0] + (i + 0.5) * step[0]
+        first = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 0, points)
+        if first == 0:
             continue
-        size = cells // (coarsest << level)
-        row = elbows[level, i, j]
-        cos_k, sin_k = wrists[level, k, 0], wrists[level, k, 1]
-        for p in range(3):
-            points[p, 0], points[p, 1] = row[2 * p], row[2 * p + 1]
-        points[3, 0] = points[2, 0] + lengths[2] * (row[6] * cos_k - row[7] * sin_k)
-        points[3, 1] = points[2, 1] + lengths[2] * (row[7] * cos_k + row[6] * sin_k)
-        for a in range(n):
-            half[a] = 0.5 * size * step[a]
-        three = _segment_status(points[2], points[3], centres, radii, link_radius,
-                                _link_motion_bound(points, arms, half, 2))
-        evaluated += 1
-        if three == 0:
-            continue
-        free = one == 1 and two == 1 and three == 1
-        if free or level == levels:
-            for a in range(i * size, (i + 1) * size):
-                for b in range(j * size, (j + 1) * size):
-                    for c in range(k * size, (k + 1) * size):
-                        possible[a, b, c] = True
-                        certified[a, b, c] = free
-            continue
-        for child in range(8):
-            stack[top, 0] = level + 1
-            stack[top, 1] = 2 * i + (child >> 2)
-            stack[top, 2] = 2 * j + ((child >> 1) & 1)
-            stack[top, 3] = 2 * k + (child & 1)
-            top += 1
-    return evaluated
-
-
-def _coarser(status: np.ndarray, factor: int) -> np.ndarray:
-    """Statuses (int8, any dimension) over cells `factor` times wider per axis.
-
-    A wide cell is free (1) or collides (0) when all its fine cells are; else unsure (2).
-    """
-    shape = [size for width in status.shape for size in (width // factor, factor)]
-    blocks = status.reshape(shape)
-    axes = tuple(range(1, 2 * status.ndim, 2))
-    return np.where((blocks == 1).all(axis=axes), 1,
-                    np.where((blocks == 0).all(axis=axes), 0, 2)).astype(np.int8)
+        for j in range(cells):
+            theta[1] = lower[1] + (j + 0.5) * step[1]
+            second = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 1,
+                                  points)
+            if second == 0:
+                continue
+            base = theta[0] + theta[1] + lower[2]
+            may_hit[:] = 0
+            surely_hit[:] = 0
+            for p in range(centres.shape[0]):
+                drift = sphere_drift(points, 2, centres[p, 0], centres[p, 1], half) + _ROUNDING
+                dx, dy = centres[p, 0] - points[2, 0], centres[p, 1] - points[2, 1]
+                distance = np.sqrt(dx * dx + dy * dy)
+                toward = np.arctan2(dy, dx)
+                reach = radii[p] + link_radius
+                off_plane2 = centres[p, 2] * centres[p, 2]
+                width = _arc_half_width(distance, lengths[2], (reach + drift) ** 2 - off_plane2)
+                if width < 0.0:
+                    continue
+                _mark_cells(may_hit, toward, width + half[2] + _ANGLE_ROUNDING, base, step[2])
+                if reach <= drift:
+                    continue
+                width = _arc_half_width(distance, lengths[2], (reach - drift) ** 2 - off_plane2)
+                if width >= np.pi:
+                    _mark_cells(surely_hit, toward, np.pi, base, step[2])
+                elif width - half[2] - _ANGLE_ROUNDING >= 0.0:
+                    _mark_cells(surely_hit, toward, width - half[2] - _ANGLE_ROUNDING, base,
+                                step[2])
+            near, inside = 0, 0
+            free = first == 1 and second == 1
+            for k in range(cells):
+                near += may_hit[k]
+                inside += surely_hit[k]
+                if inside == 0:
+                    possible[i, j, k] = True
+                    certified[i, j, k] = free and near == 0
 
 
 @numba.njit(cache=True)
 def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
     """Whether every configuration of the triangle `corners` (3, n) [rad] is free.
 
-    The clearance at the centroid must beat the lever bound of `_link_status` over the
-    corners' spread; otherwise the triangle is split in four, `depth` times at most.
+    Over the box of the corners' spread about the centroid, every link must be free by the
+    lever bound of `_link_status` or by `link_box_clearance`; otherwise the triangle is
+    split in four, `depth` times at most.
     """
     n = corners.shape[1]
     stack = np.empty((4 * depth + 1, 3, n))
@@ -272,13 +288,15 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
                           max(abs(tri[1, a] - centre[a]), abs(tri[2, a] - centre[a])))
         planar_joint_points(lengths, centre, points)
         free = True
+        direction = 0.0
         for k in range(n):
-            bound = _link_motion_bound(points, arms, half, k)
+            direction += centre[k]
             clearance = (segment_disk_clearance(points[k], points[k + 1], centres, radii)
                          - link_radius)
             if clearance <= 0.0:
                 return False
-            if clearance <= bound:
+            if clearance <= _link_motion_bound(points, arms, half, k) and link_box_clearance(
+                    points, k, lengths[k], direction, half, centres, radii) <= link_radius:
                 free = False
         if free:
             continue
@@ -372,39 +390,24 @@ class CellClasses:
     lattice: JointLattice
     certified: np.ndarray   # (N, N, N) bool
     possible: np.ndarray    # (N, N, N) bool
-    evaluations: int        # cell centres whose clearance was computed
 
 
-def classify_cells(scene: Scene, cells: int, coarsest: int = 16,
-                   margin: float = 0.0) -> CellClasses:
-    """Classify the N^3 cells, coarse to fine (`coarsest` cells per joint to begin).
+def classify_cells(scene: Scene, cells: int, margin: float = 0.0) -> CellClasses:
+    """Classify the N^3 cells (`_classify`); free means clear by more than `margin` [m].
 
-    `cells` must be `coarsest` times a power of two; free means clear by more than
-    `margin` [m] (the disks grow by it).
+    The disks grow by the margin.
     """
+    if cells < 1:
+        raise ValueError(f'cells ({cells}) must be at least 1')
     robot = scene.robot
     lattice = JointLattice.over(robot, cells)
-    levels = int(round(np.log2(cells / coarsest)))
-    if coarsest * 2 ** levels != cells or levels < 0:
-        raise ValueError(f'cells ({cells}) must be {coarsest} times a power of two')
     lengths = np.asarray(robot.link_lengths, dtype=float)
-    arms = link_lever_arms(lengths)
     centres, radii = disk_arrays(scene, margin)
-    link_radius = float(robot.link_radius)
-    fine = _fine_link_tables(lengths, link_radius, centres, radii, arms, lattice.lower,
-                             lattice.step, cells)
-    tables = [np.full((levels + 1,) + table.shape, 2, dtype=np.int8) for table in fine]
-    for level in range(levels + 1):
-        factor = cells // (coarsest * 2 ** level)
-        for table, status in zip(tables, fine, strict=True):
-            coarse = _coarser(status, factor)
-            table[(level,) + tuple(slice(0, width) for width in coarse.shape)] = coarse
     certified = np.zeros((cells,) * 3, dtype=bool)
     possible = np.zeros((cells,) * 3, dtype=bool)
-    evaluations = cells + cells * cells + _classify_octree(
-        lengths, link_radius, centres, radii, arms, lattice.lower, lattice.step, coarsest,
-        levels, *tables, certified, possible)
-    return CellClasses(lattice, certified, possible, evaluations)
+    _classify(lengths, float(robot.link_radius), centres, radii, link_lever_arms(lengths),
+              lattice.lower, lattice.step, certified, possible)
+    return CellClasses(lattice, certified, possible)
 
 
 def two_link_solutions(a: float, b: float, target: np.ndarray) -> np.ndarray:
@@ -553,15 +556,14 @@ def sub_slab_count(robot: PlanarChain, step: float, joint: int, tolerance: float
     return max(1, int(np.ceil(reach * step / (2.0 * 0.9 * tolerance))))
 
 
-def tolerant_set(scene: Scene, cells: int, coarsest: int = 16, margin: float = 0.0,
-                 ) -> TolerantSet:
+def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
     """Compute G from inside on N = `cells` cells per joint for scene.task (the outside on use).
 
     Free means clear of the disks by more than `margin` [m].
     """
     if not supports(scene):
         raise InputError('robot', 'the joint grid handles planar 3R arms among disks only')
-    classes = classify_cells(scene, cells, coarsest, margin)
+    classes = classify_cells(scene, cells, margin)
     robot, task = scene.robot, scene.task
     lattice = classes.lattice
     lengths = np.asarray(robot.link_lengths, dtype=float)

@@ -38,7 +38,7 @@ import numba
 import numpy as np
 
 from .collision import CollisionChecker
-from .distance_kernels import planar_joint_points, segment_disk_clearance
+from .distance_kernels import link_box_clearance, planar_joint_points, segment_disk_clearance
 from .failure_surface import FailureSurface
 from .paths import point_at_fraction
 from .recovery import recover
@@ -135,7 +135,11 @@ def _measure_level(checker: CollisionChecker, corners: np.ndarray, arms: np.ndar
 @numba.njit(cache=True)
 def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, margin,
                     rounding):
-    """`_measure_level` for a planar chain among spheres, compiled: no clearance array."""
+    """`_measure_level` for a planar chain among spheres, compiled: no clearance array.
+
+    A simplex stays open unless every link is clear by more than `margin` over the box of
+    its spread, by the lever bound or by `link_box_clearance` (tighter near the joints).
+    """
     count, c, n = corners.shape
     smallest = np.inf
     first_hit = -1
@@ -155,7 +159,9 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
                 worst = max(worst, abs(corners[s, v, a] - centroid[a]))
             spread[a] = worst
         planar_joint_points(lengths, centroid, points)
+        direction = 0.0
         for k in range(n):
+            direction += centroid[k]
             clearance = min(segment_disk_clearance(points[k], points[k + 1], centres, radii)
                             - link_radius, cap)
             smallest = min(smallest, clearance)
@@ -164,7 +170,9 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
             motion = 0.0
             for a in range(n):
                 motion += spread[a] * arms[k, a]
-            if not clearance - margin > motion + rounding:
+            if not clearance - margin > motion + rounding and not min(
+                    link_box_clearance(points, k, lengths[k], direction, spread, centres,
+                                       radii) - link_radius, cap) > margin:
                 opened[s] = True
     return first_hit, opened, smallest
 
