@@ -386,9 +386,9 @@ def link_box_clearance(points, k, length, direction, half, centres, radii):
             planar = distance
         elif distance * np.cos(turn) <= length:
             planar = distance * np.sin(turn)
-        else:
-            planar = np.sqrt(max(0.0, distance * distance + length * length
-                                 - 2.0 * distance * length * np.cos(turn)))
+        else:  # the tip, by the law of cosines without cancellation
+            planar = np.sqrt((distance - length) ** 2
+                             + 4.0 * distance * length * np.sin(0.5 * turn) ** 2)
         gap = np.sqrt(planar * planar + centres[p, 2] * centres[p, 2])
         best = min(best, gap - radii[p] - drift - 1e-9)
     return best
