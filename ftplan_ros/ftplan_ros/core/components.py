@@ -1,6 +1,6 @@
 """Connected components of cell masks on a joint grid whose periodic axes wrap round.
 
-`label_components` labels a 3-D mask in one compiled union-find pass. Cells are joined
+`label_components` labels a 3-D mask in one compiled pass over runs. Cells are joined
 when they touch at a face, an edge or a corner within the axes it is told (all three:
 the 26 neighbours; two: the 8 neighbours in each layer across the third, as the
 failure-tolerant set labels the layers of each joint, tolerant_set.py), round the
@@ -8,8 +8,6 @@ periodic ones. Components are numbered 1..K, and 0 is outside the mask.
 """
 
 from __future__ import annotations
-
-import itertools
 
 import numba
 import numpy as np
@@ -25,12 +23,16 @@ def label_components(mask: np.ndarray, periodic: np.ndarray,
     """
     mask = np.ascontiguousarray(mask, dtype=np.bool_)
     across = tuple(sorted(across))
-    labels = np.zeros(mask.shape, dtype=np.int32)
+    labels = np.empty(mask.shape, dtype=np.int32)
     if mask.size == 0:
         return labels
-    _label(mask.ravel(), np.array(mask.shape, dtype=np.int64), _earlier_neighbours(across),
-           np.array([axis in across and bool(periodic[axis]) for axis in range(3)]),
-           np.array(across, dtype=np.int64), labels.ravel())
+    along = across[-1]
+    lines = [axis for axis in range(3) if axis != along]
+    _label(mask.ravel(), np.array(mask.shape, dtype=np.int64),
+           np.array(lines + [along], dtype=np.int64),
+           np.array([axis in across for axis in lines]),
+           np.array([axis in across and bool(periodic[axis]) for axis in lines + [along]]),
+           labels.ravel())
     return labels
 
 
@@ -52,25 +54,6 @@ def cells_of(labels: np.ndarray, chosen: np.ndarray) -> np.ndarray:
     _gather(np.ascontiguousarray(chosen, dtype=np.bool_), np.ascontiguousarray(labels).ravel(),
             out.ravel())
     return out
-
-
-def _earlier_neighbours(across: tuple[int, ...]) -> np.ndarray:
-    """Offsets (k, 3) to the neighbours a C-order pass meets before the cell, one behind first.
-
-    The neighbour one step back along the first axis of `across` touches all the others,
-    so when it is in the mask the others are already joined to it.
-    """
-    offsets = []
-    for steps in itertools.product((-1, 0, 1), repeat=len(across)):
-        if steps < (0,) * len(across):  # earlier in C order
-            offset = [0, 0, 0]
-            for axis, step in zip(across, steps, strict=True):
-                offset[axis] = step
-            offsets.append(offset)
-    behind = [0, 0, 0]
-    behind[across[0]] = -1
-    offsets.sort(key=lambda offset: offset != behind)
-    return np.array(offsets, dtype=np.int64)
 
 
 @numba.njit(cache=True)
@@ -101,91 +84,105 @@ def _join(parent, a, b):
 
 
 @numba.njit(cache=True)
-def _label(mask, shape, earlier, wrap, across, labels):
+def _label(mask, shape, axes, joined, wrap, labels):
     """Fill `labels` (flat, C order) with the components of `mask` (flat); return K.
 
-    One pass in C order gives each cell the label of its first earlier neighbour in the
-    mask and joins the labels of the others (`earlier` (k, 3) offsets, one behind first);
-    then the last cell along each wrapped axis is joined to the first cells its
-    neighbours wrap round to; the roots are numbered 1..K by their smallest label.
+    The cells lie on lines along the last of `axes` (3,), one line per index pair along
+    the first two; each line's cells in the mask form runs. A run is one node of a
+    union-find forest: runs on neighbouring lines (a step along each of the first two
+    axes that `joined` (2,) marks, round those `wrap` (3,) marks) are joined where they
+    overlap once widened by a cell, and the last run of a line to the first of its
+    neighbours round a wrapped last axis. Roots are numbered 1..K in run order.
     """
     strides = np.array([shape[1] * shape[2], shape[2], 1], dtype=np.int64)
-    # A new label needs its cell's predecessor along the last axis of `across` out of the
-    # mask: at most half the cells of each line along that axis get one.
-    line = shape[across[-1]]
-    parent = np.empty(mask.size // line * ((line + 1) // 2) + 1, dtype=np.int32)
-    parent[0] = 0
+    size_p, size_q, size_r = shape[axes[0]], shape[axes[1]], shape[axes[2]]
+    step_p, step_q, step_r = strides[axes[0]], strides[axes[1]], strides[axes[2]]
+    lines = size_p * size_q
+    first = np.empty(lines + 1, dtype=np.int64)  # line l holds runs first[l]..first[l+1]-1
+    starts = np.empty(lines * ((size_r + 1) // 2), dtype=np.int32)
+    ends = np.empty_like(starts)
     count = 0
-    delta = (earlier * strides).sum(axis=1)  # flat offsets of the earlier neighbours
-    low = np.zeros(3, dtype=np.int64)  # cells inside [low, high] on every axis have them all
-    high = shape - 1
-    for axis in across:
-        low[axis], high[axis] = 1, shape[axis] - 2
-    f = -1
-    for i in range(shape[0]):
-        for j in range(shape[1]):
-            for k in range(shape[2]):
-                f += 1
-                if not mask[f]:
-                    labels[f] = 0
-                    continue
-                back = i if across[0] == 0 else j if across[0] == 1 else k
-                if back > 0 and mask[f + delta[0]]:
-                    # The one behind touches every other earlier neighbour: they are joined.
-                    labels[f] = labels[f + delta[0]]
-                    continue
-                interior = low[0] <= i <= high[0] and low[1] <= j <= high[1] \
-                    and low[2] <= k <= high[2]
-                found = 0
-                for o in range(1, earlier.shape[0]):
-                    if not interior and not (
-                            0 <= i + earlier[o, 0] < shape[0]
-                            and 0 <= j + earlier[o, 1] < shape[1]
-                            and 0 <= k + earlier[o, 2] < shape[2]):
-                        continue
-                    g = f + delta[o]
-                    if mask[g]:
-                        found = labels[g] if found == 0 else _join(parent, found, labels[g])
-                if found == 0:
-                    count += 1
-                    parent[count] = count
-                    found = count
-                labels[f] = found
-    for axis in range(3):
-        if wrap[axis]:
-            _join_round(mask, shape, strides, wrap, across, axis, parent, labels)
-    number = np.zeros(count + 1, dtype=np.int32)
+    for line in range(lines):
+        first[line] = count
+        base = (line // size_q) * step_p + (line % size_q) * step_q
+        r = 0
+        while r < size_r:
+            if mask[base + r * step_r]:
+                starts[count] = r
+                while r + 1 < size_r and mask[base + (r + 1) * step_r]:
+                    r += 1
+                ends[count] = r
+                count += 1
+            r += 1
+    first[lines] = count
+    parent = np.arange(count, dtype=np.int32)
+    # Each pair of neighbouring lines once: the neighbours one step back (as C order).
+    steps = np.array([[-1, -1], [-1, 0], [-1, 1], [0, -1], [0, 0]], dtype=np.int64)
+    for line in range(lines):
+        p, q = line // size_q, line % size_q
+        for s in range(steps.shape[0]):
+            dp, dq = steps[s, 0], steps[s, 1]
+            if (dp != 0 and not joined[0]) or (dq != 0 and not joined[1]):
+                continue
+            if dp == 0 and dq == 0 and not wrap[2]:
+                continue
+            other_p = _index_along(p + dp, size_p, wrap[0])
+            other_q = _index_along(q + dq, size_q, wrap[1])
+            if other_p < 0 or other_q < 0:
+                continue
+            other = other_p * size_q + other_q
+            if dp != 0 or dq != 0:
+                _join_overlaps(parent, starts, ends, first[line], first[line + 1],
+                               first[other], first[other + 1])
+            if wrap[2]:
+                _join_round(parent, starts, ends, first[line], first[line + 1], first[other],
+                            first[other + 1], size_r)
+    number = np.zeros(count, dtype=np.int32)
     components = 0
-    for label in range(1, count + 1):
-        root = _root(parent, label)
-        if root == label:
+    for run in range(count):
+        root = _root(parent, run)
+        if root == run:
             components += 1
-            number[label] = components
+            number[run] = components
         else:
-            number[label] = number[root]
-    for f in range(mask.size):
-        labels[f] = number[labels[f]]
+            number[run] = number[root]  # a root is the smallest run of its tree: numbered
+    for line in range(lines):
+        base = (line // size_q) * step_p + (line % size_q) * step_q
+        r = 0
+        for run in range(first[line], first[line + 1]):
+            while r < starts[run]:
+                labels[base + r * step_r] = 0
+                r += 1
+            while r <= ends[run]:
+                labels[base + r * step_r] = number[run]
+                r += 1
+        while r < size_r:
+            labels[base + r * step_r] = 0
+            r += 1
     return components
 
 
 @numba.njit(cache=True)
-def _join_round(mask, shape, strides, wrap, across, axis, parent, labels):
-    """Join the cells last along `axis` to their neighbours first along it (wrapped round)."""
-    b, c = (1, 2) if axis == 0 else (0, 2) if axis == 1 else (0, 1)
-    reach_b = 1 if b in across else 0  # how far a neighbour may be along b and c
-    reach_c = 1 if c in across else 0
-    last = (shape[axis] - 1) * strides[axis]
-    for u in range(shape[b]):
-        for v in range(shape[c]):
-            f = last + u * strides[b] + v * strides[c]
-            if not mask[f]:
-                continue
-            for du in range(-reach_b, reach_b + 1):
-                x = _index_along(u + du, shape[b], wrap[b])
-                for dv in range(-reach_c, reach_c + 1):
-                    y = _index_along(v + dv, shape[c], wrap[c])
-                    if x >= 0 and y >= 0 and mask[x * strides[b] + y * strides[c]]:
-                        _join(parent, labels[f], labels[x * strides[b] + y * strides[c]])
+def _join_overlaps(parent, starts, ends, a, a_end, b, b_end):
+    """Join the runs a..a_end-1 and b..b_end-1 (each sorted) that overlap once widened by a cell."""
+    while a < a_end and b < b_end:
+        if starts[b] <= ends[a] + 1 and ends[b] >= starts[a] - 1:
+            _join(parent, a, b)
+        if ends[a] < ends[b]:
+            a += 1
+        else:
+            b += 1
+
+
+@numba.njit(cache=True)
+def _join_round(parent, starts, ends, a, a_end, b, b_end, size):
+    """Join a line's last run to another's first where they touch round a wrapped axis."""
+    if a == a_end or b == b_end:
+        return
+    if ends[a_end - 1] == size - 1 and starts[b] == 0:
+        _join(parent, a_end - 1, b)
+    if ends[b_end - 1] == size - 1 and starts[a] == 0:
+        _join(parent, b_end - 1, a)
 
 
 @numba.njit(cache=True)
