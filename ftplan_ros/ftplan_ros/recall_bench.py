@@ -135,8 +135,9 @@ def summarize(runs: list[RecallRun], cells: int) -> str:
             continue
         cold, warm, ref = (np.array([getattr(r, a) for r in rows]) * 1e3
                            for a in ('cold_s', 'warm_s', 'reference_s'))
+        ratio = np.median(ref) / np.median(cold)
         lines.append(f'{name:<28}{len(rows):>7}{_p(cold):>16}{_p(warm):>16}{_p(ref):>18}'
-                     f'{np.median(ref) / np.median(cold):>13.0f}x')
+                     f'{ratio:>13.{0 if ratio >= 10 else 1}f}x')
     lines.append(f'false guarantees (a plan the reference or the referee refutes): '
                  f'{sum(r.refuted for r in runs)} (must be 0)')
     return '\n'.join(lines)
