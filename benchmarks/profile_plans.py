@@ -33,7 +33,7 @@ STAGES = (
     ('paper: surface search', 'surface_search.py', '_search'),
     ('paper: verify surfaces', 'surface_search.py', '_verify_best'),
     ('G on the grids', 'tolerant_set.py', 'tolerant_set'),
-    ('  cell classes', 'tolerant_set.py', 'classify_cells'),
+    ('  cell classes', 'cell_classes.py', 'classify_cells'),
     ('  labelling', 'components.py', 'layer_labels'),
     ('sheets: build the web', 'web_search.py', '_plan_on'),
     ('verify S_F (either method)', 'verification.py', 'verify_surface'),

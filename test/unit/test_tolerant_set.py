@@ -15,25 +15,27 @@ from scipy.sparse.csgraph import connected_components
 
 from ftplan_ros.core import CollisionChecker, InputError, load_scene, parse_scene, plan, recover
 from ftplan_ros.core.brute_force import recoverable_in_plane
-from ftplan_ros.core.components import cells_of, label_components, layer_labels
-from ftplan_ros.core.distance_kernels import planar_link_clearances
-from ftplan_ros.core.paths import densify, point_at_fraction
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle
-from ftplan_ros.core.tolerant_set import (
+from ftplan_ros.core.cell_classes import (
     JointLattice,
     _arc_half_width,
     _mark_cells,
     classify_cells,
     disk_arrays,
     link_lever_arms,
+    supports,
+    triangle_free,
+)
+from ftplan_ros.core.components import cells_of, label_components, layer_labels
+from ftplan_ros.core.distance_kernels import planar_link_clearances
+from ftplan_ros.core.paths import densify, point_at_fraction
+from ftplan_ros.core.robot import PlanarChain
+from ftplan_ros.core.scene import Obstacle
+from ftplan_ros.core.tolerant_set import (
     locked_goal_configurations,
     locked_goal_configurations_at,
     preimage_samples,
     sub_slab_count,
-    supports,
     tolerant_set,
-    triangle_free,
     two_link_solutions,
 )
 

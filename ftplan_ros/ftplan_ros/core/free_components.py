@@ -1,12 +1,12 @@
 """Configurations that no collision-free joint path joins, proved on a joint grid.
 
 A path clear of the obstacles lies in the cells of a joint grid that may hold a free
-configuration (the `possible` cells of `tolerant_set.classify_cells`), and it passes
+configuration (the `possible` cells of `cell_classes.classify_cells`), and it passes
 from one such cell to the next where they touch, at a face, an edge or a corner. Two
 configurations whose cells lie in different components of those cells (round the
 periodic joints) are therefore joined by no collision-free path at all, however one
 searches. A configuration in a cell of no component collides. The grid applies to
-planar 3R arms among disks (`tolerant_set.supports`); the approach planner asks it
+planar 3R arms among disks (`cell_classes.supports`); the approach planner asks it
 before it searches with RRT-Connect.
 """
 
@@ -16,10 +16,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .cell_classes import classify_cells, supports
 from .components import label_components, layer_labels
 from .robot import Robot
 from .scene import Obstacle, Scene
-from .tolerant_set import classify_cells, supports
 
 # Cells per joint. The proof holds at any resolution; a finer grid proves more pairs
 # apart (narrower gaps), a coarser one is quicker: 64^3 classifies in about 10 ms.

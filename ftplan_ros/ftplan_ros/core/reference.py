@@ -26,9 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .cell_classes import supports
 from .components import label_components
 from .scene import Scene
-from .tolerant_set import TolerantSet, preimage_samples, supports, tolerant_set
+from .tolerant_set import TolerantSet, preimage_samples, tolerant_set
 
 
 class Existence(enum.Enum):

@@ -44,6 +44,7 @@ import numba
 import numpy as np
 
 from .angles import wrap_angle
+from .cell_classes import disk_arrays, link_lever_arms, supports, triangle_free
 from .collision import CollisionChecker
 from .failure_surface import FailureSurface
 from .manifolds import project_to_preimage
@@ -51,15 +52,7 @@ from .options import PlannerOptions
 from .reference import proves_no
 from .result import PlanResult
 from .scene import Scene
-from .tolerant_set import (
-    TolerantSet,
-    disk_arrays,
-    link_lever_arms,
-    preimage_samples,
-    supports,
-    tolerant_set,
-    triangle_free,
-)
+from .tolerant_set import TolerantSet, preimage_samples, tolerant_set
 from .verification import verify_surface
 
 log = logging.getLogger(__name__)
