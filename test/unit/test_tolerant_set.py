@@ -1,9 +1,10 @@
 """The failure-tolerant set G on a joint grid (core/tolerant_set.py) against brute force.
 
-Kinematics against circle intersections and numerical root finding; clearances and
-triangles against dense sampling with the robot's own CollisionChecker; the certified
-(inside) and liberal (outside) sets against configurations a verified plan passes through
-and an over-approximating flood fill of each failure plane.
+Kinematics against circle intersections and numerical root finding; the cell classes,
+their arcs and triangles (core/cell_classes.py) against dense sampling with the robot's
+own CollisionChecker; the components (core/components.py) against an explicit graph;
+the certified (inside) and liberal (outside) sets against configurations a verified plan
+passes through and an over-approximating flood fill of each failure plane.
 """
 
 import numpy as np
