@@ -337,3 +337,43 @@ def chain_frames(parameters: np.ndarray, thetas: np.ndarray) -> np.ndarray:
             out[k, f, :3, 3] = origins[f]
             out[k, f, 3, 3] = 1.0
     return out
+
+
+@numba.njit(cache=True)
+def project_seeds(kind: int, parameters: np.ndarray, target: np.ndarray, thetas: np.ndarray,
+                  m: int, movable: np.ndarray, periodic: np.ndarray, lower: np.ndarray,
+                  upper: np.ndarray, tolerance: float, max_iterations: int) -> np.ndarray:
+    """Damped least-squares Newton from each seed (N, n) [rad] towards f(θ) = target.
+
+    Moves the seeds in place and returns their residual norms (N,) at the end. Only the
+    `movable` joints step; each step is at most 0.5 rad long, and joints that are not
+    `periodic` are clipped to [lower, upper] after it. A seed stops once its residual
+    is below `tolerance`.
+    """
+    count, n = thetas.shape
+    columns = np.flatnonzero(movable)
+    errors = np.empty(count)
+    for k in range(count):
+        theta = np.ascontiguousarray(thetas[k])
+        for iteration in range(max_iterations + 1):
+            residual, jac = task_residual(kind, parameters, target, theta)
+            error = np.sqrt(residual @ residual)
+            if error < tolerance or iteration == max_iterations:
+                break
+            jac = np.ascontiguousarray(jac[:, columns])
+            gram = jac @ jac.T
+            damping = 1e-6 if error < 1e-3 else 1e-3
+            for i in range(m):
+                gram[i, i] += damping
+            step = jac.T @ np.linalg.solve(gram, residual)
+            length = np.sqrt(step @ step)
+            if length > 0.5:  # keep Newton local
+                step *= 0.5 / length
+            for i in range(columns.shape[0]):
+                theta[columns[i]] += step[i]
+            for j in range(n):
+                if not periodic[j]:
+                    theta[j] = min(max(theta[j], lower[j]), upper[j])
+        thetas[k] = theta
+        errors[k] = error
+    return errors

@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from . import kernels
 from .angles import configuration_difference, wrap_configuration
 from .collision import CollisionChecker
 from .continuation import CLOSED, STALLED, TOO_LONG, trace_curve
@@ -115,16 +116,21 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
     for _ in range(options.seed_rounds):
         seeds = rng.uniform(limits[:, 0], limits[:, 1], size=(options.seeds, robot.n_joints))
         solved, converged = project_many(robot, x, seeds, options.tolerance)
+        found = np.flatnonzero(converged)
+        thetas = wrap_configuration(solved[found], robot.periodic)
+        covered = np.zeros(len(found), dtype=bool)
+        for branch in branches:
+            covered |= _near_branch(robot, thetas, branch, options.step_max)
         last_new = -1
-        for k in np.flatnonzero(converged):
-            theta = wrap_configuration(solved[k], robot.periodic)
-            if any(_distance_to_branch(robot, theta, b) < options.step_max for b in branches):
+        for k in range(len(found)):
+            if covered[k]:
                 continue
-            branch = trace_branch(robot, x, theta, options)
+            branch = trace_branch(robot, x, thetas[k], options)
             log.debug('branch %d: %d points, closed=%s', len(branches), len(branch),
                       branch.closed)
             branches.append(branch)
-            last_new = k
+            covered |= _near_branch(robot, thetas, branch, options.step_max)
+            last_new = found[k]
         if last_new < options.seeds // 2:
             break
     if not branches:
@@ -216,32 +222,16 @@ def project_many(robot: Robot, x: np.ndarray, thetas: np.ndarray, tolerance: flo
 
     Steps are clipped to the joint limits, so a converged configuration is within them.
     """
-    thetas = np.array(thetas, dtype=float)
+    thetas = np.array(np.atleast_2d(thetas), dtype=float)
     movable = np.ones(robot.n_joints, dtype=bool)
     if fixed_joint is not None:
         movable[fixed_joint] = False
-    eye = np.eye(robot.task_dim)
-    for _ in range(max_iterations):
-        residual, jac = task_residuals(robot, x, thetas)  # (S, m), (S, m, n)
-        error = np.linalg.norm(residual, axis=1)
-        active = error >= tolerance
-        if not active.any():
-            break
-        jac = jac[active][:, :, movable]  # (A, m, k)
-        damping = np.where(error[active] < 1e-3, 1e-6, 1e-3)[:, None, None]
-        gram = jac @ np.swapaxes(jac, 1, 2) + damping * eye
-        weights = np.linalg.solve(gram, residual[active][..., None])[..., 0]
-        step = np.einsum('amk,am->ak', jac, weights)
-        norm = np.linalg.norm(step, axis=1, keepdims=True)
-        step *= np.minimum(1.0, 0.5 / np.maximum(norm, 1e-300))  # keep Newton local
-        rows = np.flatnonzero(active)
-        thetas[np.ix_(rows, np.flatnonzero(movable))] += step
-        # Stay within the joint limits: Newton projected onto them still converges to a
-        # solution inside when there is one nearby, where a free step would leave them.
-        thetas[rows] = np.where(robot.periodic, thetas[rows],
-                                np.clip(thetas[rows], robot.limits[:, 0], robot.limits[:, 1]))
-    residual, _ = task_residuals(robot, x, thetas)
-    converged = np.linalg.norm(residual, axis=1) < tolerance
+    limits = robot.limits
+    errors = kernels.project_seeds(robot.kernel_kind, robot.kernel_parameters,
+                                   np.asarray(x, dtype=float), thetas, robot.task_dim, movable,
+                                   robot.periodic, limits[:, 0].copy(), limits[:, 1].copy(),
+                                   tolerance, max_iterations)
+    converged = errors < tolerance
     # A tool axis that points exactly away from the goal's also zeroes its residual.
     converged[converged] &= task_errors(robot, x, thetas[converged])[:, 1] < 1e-6
     return thetas, converged
@@ -291,6 +281,9 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
     return list(points), status == CLOSED, period
 
 
-def _distance_to_branch(robot: Robot, theta: np.ndarray, branch: SelfMotionManifold) -> float:
-    gaps = configuration_difference(branch.points, theta, robot.periodic)
-    return float(np.min(np.linalg.norm(gaps, axis=1)))
+def _near_branch(robot: Robot, thetas: np.ndarray, branch: SelfMotionManifold,
+                 distance: float) -> np.ndarray:
+    """(S,) bool: configurations (S, n) [rad] within `distance` of a point of the branch."""
+    gaps = configuration_difference(branch.points[None, :, :], thetas[:, None, :],
+                                    robot.periodic)
+    return np.min(np.linalg.norm(gaps, axis=2), axis=1, initial=np.inf) < distance
