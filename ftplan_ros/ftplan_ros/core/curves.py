@@ -204,7 +204,7 @@ def curve_candidates(scene: Scene, options: PlannerOptions, rng: np.random.Gener
     if len(starts) == 0:
         return []
     clear_starts = checker.min_clearance(starts, margin + 0.1, refine=False)
-    order = np.argsort(-clear_starts)[:8]
+    order = np.argsort(-_tied(clear_starts), kind='stable')[:8]
     per_set = []
     for frozen in _freeze_sets(robot, starts, robot.n_joints - robot.task_dim - 1,
                                scene.tolerated_joints):
@@ -216,11 +216,20 @@ def curve_candidates(scene: Scene, options: PlannerOptions, rng: np.random.Gener
             if len(goals):
                 goal_clearance = checker.min_clearance(goals, margin + 0.1, refine=False).max()
                 ranked.append((frozen, values, float(min(clear_starts[k], goal_clearance))))
-        per_set.append(sorted(ranked, key=lambda candidate: -candidate[2]))
+        per_set.append(sorted(ranked, key=lambda candidate: -_tied(candidate[2])))
     rounds = [[ranked[k] for ranked in per_set if k < len(ranked)]
               for k in range(max(map(len, per_set), default=0))]
     return [candidate for one_round in rounds
-            for candidate in sorted(one_round, key=lambda candidate: -candidate[2])]
+            for candidate in sorted(one_round, key=lambda candidate: -_tied(candidate[2]))]
+
+
+def _tied(clearance):
+    """Clearances [m] rounded to a nanometre: equal ones keep their order when sorted.
+
+    Every candidate often shares one score (the tool's own clearance at x_s, the same for
+    every configuration), and rounding noise must not reorder them.
+    """
+    return np.round(clearance, 9)
 
 
 def _free_samples(robot, x: np.ndarray, checker: CollisionChecker, margin: float,
