@@ -26,7 +26,7 @@ from ftplan_ros.core.cell_classes import (
     supports,
     triangle_free,
 )
-from ftplan_ros.core.components import cells_of, label_components, layer_labels
+from ftplan_ros.core.components import components, label_components, layer_labels
 from ftplan_ros.core.distance_kernels import planar_link_clearances
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.robot import PlanarChain
@@ -361,12 +361,24 @@ def test_label_components_finds_the_components_round_the_torus():
         a, b = labels[mask], truth[mask]
         # The same partition: equal labels exactly where the referee's are equal.
         assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]), trial
+        # What the runs answer without labels: the same as the labels say.
+        found = components(mask, periodic, (0, 1, 2) if trial % 2 else
+                           tuple(a for a in range(3) if a != joint))
         chosen = rng.random(labels.max() + 1) < 0.5
-        assert np.array_equal(cells_of(labels, chosen), chosen[labels])
+        assert np.array_equal(found.cells(chosen), chosen[labels] & mask)
+        cells = np.argwhere(np.ones(shape, bool))
+        assert np.array_equal(found.at(cells), labels[tuple(cells.T)])
+        seeds = rng.random(shape) < 0.2
+        holding = np.zeros(labels.max() + 1, bool)
+        holding[labels[seeds & mask]] = True
+        assert np.array_equal(found.holding(seeds), holding)
     for shape in ((0, 3, 3), (3, 3, 0)):  # no cell: no component, and no write outside
         assert label_components(np.zeros(shape, bool), np.ones(3, bool)).shape == shape
+    found = components(np.ones((4, 4, 4), bool), np.zeros(3, bool))
     with pytest.raises(ValueError, match='need 2 choices'):
-        cells_of(label_components(np.ones((4, 4, 4), bool), np.zeros(3, bool)), np.array([False]))
+        found.cells(np.array([False]))
+    with pytest.raises(ValueError, match='within the grid'):
+        found.at(np.array([[0, 4, 0]]))
 
 
 # G from both sides ----------------------------------------------------------------------

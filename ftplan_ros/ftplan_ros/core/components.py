@@ -1,66 +1,172 @@
 """Connected components of cell masks on a joint grid whose periodic axes wrap round.
 
-`label_components` labels a 3-D mask in one compiled pass over runs. Cells are joined
-when they touch at a face, an edge or a corner within the axes it is told (all three:
-the 26 neighbours; two: the 8 neighbours in each layer across the third, as the
-failure-tolerant set labels the layers of each joint, tolerant_set.py), round the
-periodic ones. Components are numbered 1..K, and 0 is outside the mask.
+`components` finds the components of a 3-D mask in one compiled pass over runs: the
+cells of the mask along each line of the grid. Cells are joined when they touch at a
+face, an edge or a corner within the axes it is told (all three: the 26 neighbours; two:
+the 8 neighbours in each layer across the third, as the failure-tolerant set labels the
+layers of each joint, tolerant_set.py), round the periodic ones. Components are
+numbered 1..K, and 0 is outside the mask. The answer stays in runs: the components at
+given cells, those holding a cell of another mask and the cells of chosen components
+are read from them without writing a label per cell.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 
 
-def label_components(mask: np.ndarray, periodic: np.ndarray,
-                     across: tuple[int, ...] = (0, 1, 2)) -> np.ndarray:
-    """Label the components of `mask` (N0, N1, N2) bool: int32 (N0, N1, N2).
+@dataclass(frozen=True, eq=False)
+class Components:
+    """The components of a mask (N0, N1, N2) as runs of cells along lines.
+
+    Lines run along `axes[2]`, one per index pair along `axes[0]` and `axes[1]`; line l
+    holds the runs first[l]..first[l+1]-1, run r covers indices starts[r]..ends[r] of its
+    line and belongs to component number[r] (1..count).
+    """
+
+    shape: tuple[int, int, int]
+    axes: np.ndarray
+    first: np.ndarray
+    starts: np.ndarray
+    ends: np.ndarray
+    number: np.ndarray
+    count: int
+
+    def at(self, cells: np.ndarray) -> np.ndarray:
+        """Components (k,) int32 of the cells (k, 3) (indices within the grid); 0 outside."""
+        cells = np.ascontiguousarray(np.reshape(cells, (-1, 3)), dtype=np.int64)
+        if cells.size and not (np.all(cells >= 0) and np.all(cells < self.shape)):
+            raise ValueError(f'cells must lie within the grid {self.shape}')
+        return _at(self.first, self.starts, self.ends, self.number, self._sizes(), self.axes,
+                   cells)
+
+    def holding(self, seeds: np.ndarray) -> np.ndarray:
+        """(count + 1,) bool: the components that hold a cell of `seeds` (the mask's shape)."""
+        out = np.zeros(self.count + 1, dtype=np.bool_)
+        _holding(self.first, self.starts, self.ends, self.number, self._sizes(), self._strides(),
+                 self.axes, np.ascontiguousarray(seeds, dtype=np.bool_).ravel(), out)
+        return out
+
+    def cells(self, chosen: np.ndarray) -> np.ndarray:
+        """(shape) bool: the cells of the components `chosen` (count + 1,) bool marks."""
+        chosen = np.asarray(chosen, dtype=np.bool_)
+        if chosen.shape != (self.count + 1,):
+            raise ValueError(f'{self.count} components need {self.count + 1} choices, got '
+                             f'{len(chosen)}')
+        out = np.zeros(self.shape, dtype=np.bool_)
+        _paint(chosen[self.number], self.first, self.starts, self.ends, self._sizes(),
+               self._strides(), self.axes, out.ravel())
+        return out
+
+    def labels(self) -> np.ndarray:
+        """(shape) int32: each cell's component, 0 outside the mask."""
+        out = np.zeros(self.shape, dtype=np.int32)
+        _paint(self.number, self.first, self.starts, self.ends, self._sizes(), self._strides(),
+               self.axes, out.ravel())
+        return out
+
+    def _sizes(self) -> np.ndarray:
+        return np.array(self.shape, dtype=np.int64)
+
+    def _strides(self) -> np.ndarray:
+        return np.array([self.shape[1] * self.shape[2], self.shape[2], 1], dtype=np.int64)
+
+
+def components(mask: np.ndarray, periodic: np.ndarray,
+               across: tuple[int, ...] = (0, 1, 2)) -> Components:
+    """Find the components of `mask` (N0, N1, N2) bool.
 
     Cells are neighbours when their indices differ by at most one along each axis of
     `across` and not at all along the others; along an axis that `periodic` (3,) marks,
     index 0 and index N-1 differ by one.
     """
     mask = np.ascontiguousarray(mask, dtype=np.bool_)
+    if mask.ndim != 3:
+        raise ValueError(f'the mask must be 3-D, got shape {mask.shape}')
     across = tuple(sorted(across))
-    labels = np.empty(mask.shape, dtype=np.int32)
-    if mask.size == 0:
-        return labels
     along = across[-1]
     lines = [axis for axis in range(3) if axis != along]
-    _label(mask.ravel(), np.array(mask.shape, dtype=np.int64),
-           np.array(lines + [along], dtype=np.int64),
-           np.array([axis in across for axis in lines]),
-           np.array([axis in across and bool(periodic[axis]) for axis in lines + [along]]),
-           labels.ravel())
-    return labels
+    axes = np.array(lines + [along], dtype=np.int64)
+    first, starts, ends, number, count = _runs(
+        mask.ravel(), np.array(mask.shape, dtype=np.int64), axes,
+        np.array([axis in across for axis in lines]),
+        np.array([axis in across and bool(periodic[axis]) for axis in lines + [along]]))
+    return Components(tuple(int(v) for v in mask.shape), axes, first, starts, ends, number,
+                      int(count))
+
+
+def layer_components(mask: np.ndarray, joint: int, periodic: np.ndarray) -> Components:
+    """Find the components of each θ_joint-layer of `mask` (cells touching in the layer)."""
+    return components(mask, periodic, tuple(a for a in range(3) if a != joint))
+
+
+def label_components(mask: np.ndarray, periodic: np.ndarray,
+                     across: tuple[int, ...] = (0, 1, 2)) -> np.ndarray:
+    """Label the components of `mask` (see `components`): int32 (N0, N1, N2)."""
+    return components(mask, periodic, across).labels()
 
 
 def layer_labels(mask: np.ndarray, joint: int, periodic: np.ndarray) -> np.ndarray:
     """Label the components of each θ_joint-layer of `mask` (cells touching in the layer)."""
-    return label_components(mask, periodic, tuple(a for a in range(3) if a != joint))
-
-
-def cells_of(labels: np.ndarray, chosen: np.ndarray) -> np.ndarray:
-    """(labels.shape) bool: the cells whose label (0..K) `chosen` (K+1,) bool marks.
-
-    The same as `chosen[labels]`, in a compiled loop (numpy's gather by int32 labels is
-    slower by about three times).
-    """
-    if labels.size and not 0 <= labels.min() <= labels.max() < len(chosen):
-        raise ValueError(f'labels 0..{labels.max()} need {labels.max() + 1} choices, '
-                         f'got {len(chosen)}')
-    out = np.empty(labels.shape, dtype=np.bool_)
-    _gather(np.ascontiguousarray(chosen, dtype=np.bool_), np.ascontiguousarray(labels).ravel(),
-            out.ravel())
-    return out
+    return layer_components(mask, joint, periodic).labels()
 
 
 @numba.njit(cache=True)
-def _gather(chosen, labels, out):
-    """out[f] = chosen[labels[f]] for every cell f (flat arrays)."""
-    for f in range(labels.size):
-        out[f] = chosen[labels[f]]
+def _line_base(line, sizes, strides, axes):
+    """Flat index of the first cell of line `line`."""
+    size_q = sizes[axes[1]]
+    return (line // size_q) * strides[axes[0]] + (line % size_q) * strides[axes[1]]
+
+
+@numba.njit(cache=True)
+def _paint(values, first, starts, ends, sizes, strides, axes, out):
+    """out[cell] = values[run] for the cells of every run whose value is not zero (flat)."""
+    step_r = strides[axes[2]]
+    for line in range(first.shape[0] - 1):
+        base = _line_base(line, sizes, strides, axes)
+        for run in range(first[line], first[line + 1]):
+            value = values[run]
+            if value:
+                for r in range(starts[run], ends[run] + 1):
+                    out[base + r * step_r] = value
+
+
+@numba.njit(cache=True)
+def _holding(first, starts, ends, number, sizes, strides, axes, seeds, out):
+    """out[number[run]] = True for every run that holds a cell of `seeds` (flat)."""
+    step_r = strides[axes[2]]
+    for line in range(first.shape[0] - 1):
+        base = _line_base(line, sizes, strides, axes)
+        for run in range(first[line], first[line + 1]):
+            if out[number[run]]:
+                continue
+            for r in range(starts[run], ends[run] + 1):
+                if seeds[base + r * step_r]:
+                    out[number[run]] = True
+                    break
+
+
+@numba.njit(cache=True)
+def _at(first, starts, ends, number, sizes, axes, cells):
+    """Component of each cell (k, 3), by bisection among the runs of its line; 0 outside."""
+    out = np.zeros(cells.shape[0], dtype=np.int32)
+    size_q = sizes[axes[1]]
+    for k in range(cells.shape[0]):
+        line = cells[k, axes[0]] * size_q + cells[k, axes[1]]
+        r = cells[k, axes[2]]
+        low, high = first[line], first[line + 1]
+        while low < high:  # the first run that ends at or after r
+            middle = (low + high) // 2
+            if ends[middle] < r:
+                low = middle + 1
+            else:
+                high = middle
+        if low < first[line + 1] and starts[low] <= r:
+            out[k] = number[low]
+    return out
 
 
 @numba.njit(cache=True)
@@ -84,8 +190,8 @@ def _join(parent, a, b):
 
 
 @numba.njit(cache=True)
-def _label(mask, shape, axes, joined, wrap, labels):
-    """Fill `labels` (flat, C order) with the components of `mask` (flat); return K.
+def _runs(mask, shape, axes, joined, wrap):
+    """Find the runs of `mask` (flat, C order) and their components (see `Components`).
 
     The cells lie on lines along the last of `axes` (3,), one line per index pair along
     the first two; each line's cells in the mask form runs. A run is one node of a
@@ -93,6 +199,8 @@ def _label(mask, shape, axes, joined, wrap, labels):
     axes that `joined` (2,) marks, round those `wrap` (3,) marks) are joined where they
     overlap once widened by a cell, and the last run of a line to the first of its
     neighbours round a wrapped last axis. Roots are numbered 1..K in run order.
+
+    Returns first, starts, ends, number and K.
     """
     strides = np.array([shape[1] * shape[2], shape[2], 1], dtype=np.int64)
     size_p, size_q, size_r = shape[axes[0]], shape[axes[1]], shape[axes[2]]
@@ -146,20 +254,7 @@ def _label(mask, shape, axes, joined, wrap, labels):
             number[run] = components
         else:
             number[run] = number[root]  # a root is the smallest run of its tree: numbered
-    for line in range(lines):
-        base = (line // size_q) * step_p + (line % size_q) * step_q
-        r = 0
-        for run in range(first[line], first[line + 1]):
-            while r < starts[run]:
-                labels[base + r * step_r] = 0
-                r += 1
-            while r <= ends[run]:
-                labels[base + r * step_r] = number[run]
-                r += 1
-        while r < size_r:
-            labels[base + r * step_r] = 0
-            r += 1
-    return components
+    return first, starts[:count].copy(), ends[:count].copy(), number, components
 
 
 @numba.njit(cache=True)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cell_classes import supports
-from .components import label_components
+from .components import Components, components
 from .scene import Scene
 from .tolerant_set import TolerantSet, preimage_samples, tolerant_set
 
@@ -71,12 +71,12 @@ def proves_yes(grid: TolerantSet) -> bool:
     lattice = grid.lattice
     robot, task = grid.scene.robot, grid.scene.task
     lengths = np.asarray(robot.link_lengths, dtype=float)
-    labels = label_components(inside, lattice.periodic)
+    found = components(inside, lattice.periodic)
     starts = preimage_samples(lengths, np.asarray(task.start, dtype=float), 8 * lattice.cells)
     goals = np.vstack([grid.goal_points[j] for j in grid.joints] + [
         preimage_samples(lengths, np.asarray(task.goal, dtype=float), 8 * lattice.cells)])
-    return bool(np.intersect1d(_labels_at(labels, lattice, starts),
-                               _labels_at(labels, lattice, goals)).size)
+    return bool(np.intersect1d(_components_at(found, lattice, starts),
+                               _components_at(found, lattice, goals)).size)
 
 
 def proves_no(grid: TolerantSet) -> bool:
@@ -88,14 +88,13 @@ def proves_no(grid: TolerantSet) -> bool:
     robot, task = grid.scene.robot, grid.scene.task
     start = lattice.tool_near(robot, np.asarray(task.start, dtype=float))
     goal = grid.near_goal
-    labels = label_components(outside, lattice.periodic)
-    shared = np.intersect1d(labels[start & outside], labels[goal & outside])
-    return not shared[shared > 0].size
+    found = components(outside, lattice.periodic)
+    shared = found.holding(start) & found.holding(goal)
+    return not shared[1:].any()
 
 
-def _labels_at(labels: np.ndarray, lattice, points: np.ndarray) -> np.ndarray:
-    """Labels (> 0) of the cells holding configurations (c, 3) [rad] within the limits."""
+def _components_at(found: Components, lattice, points: np.ndarray) -> np.ndarray:
+    """Components (> 0) of the cells holding configurations (c, 3) [rad] within the limits."""
     points = points[lattice.inside(points)]
-    index = lattice.cell_of(points)
-    found = labels[index[:, 0], index[:, 1], index[:, 2]]
-    return np.unique(found[found > 0])
+    at = found.at(lattice.cell_of(points))
+    return np.unique(at[at > 0])

@@ -36,7 +36,7 @@ from functools import cached_property
 import numpy as np
 
 from .cell_classes import CellClasses, JointLattice, classify_cells, supports
-from .components import cells_of, layer_labels
+from .components import layer_components
 from .errors import InputError
 from .robot import PlanarChain
 from .scene import Scene
@@ -166,11 +166,8 @@ class TolerantSet:
         possibly_goal = self.near_goal & classes.possible
         out = {}
         for joint in self.joints:
-            labels = layer_labels(classes.possible, joint, lattice.periodic)
-            escape = np.zeros(labels.max() + 1, dtype=bool)
-            escape[labels[possibly_goal]] = True
-            escape[0] = False
-            out[joint] = cells_of(labels, escape)
+            found = layer_components(classes.possible, joint, lattice.periodic)
+            out[joint] = found.cells(found.holding(possibly_goal))
         return out
 
     @cached_property
@@ -203,7 +200,7 @@ def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
     certified, goals_of, slabs_of, subs = {}, {}, {}, {}
     for joint in scene.tolerated_joints:
         # Components of certified free cells covering every sub-slab with a goal.
-        labels = layer_labels(classes.certified, joint, lattice.periodic)
+        found = layer_components(classes.certified, joint, lattice.periodic)
         m = sub_slab_count(robot, lattice.step[joint], joint, task.goal_tolerance)
         if m > 62:
             raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
@@ -213,12 +210,12 @@ def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
         keep = lattice.inside(points)
         points, slab = points[keep], slab[keep]
         index = lattice.cell_of(points)
-        label = labels[index[:, 0], index[:, 1], index[:, 2]]
-        coverage = np.zeros(labels.max() + 1, dtype=np.int64)
+        label = found.at(index)
+        coverage = np.zeros(found.count + 1, dtype=np.int64)
         np.bitwise_or.at(coverage, label, np.left_shift(1, slab % m).astype(np.int64))
         full = coverage == (1 << m) - 1
         full[0] = False
-        certified[joint] = cells_of(labels, full)
+        certified[joint] = found.cells(full)
         goals_of[joint] = points[full[label]]
         slabs_of[joint] = slab[full[label]]
         subs[joint] = m
