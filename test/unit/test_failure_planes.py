@@ -7,7 +7,8 @@ from ftplan_testing import SCENES, jacobian
 from ftplan_ros.core import load_scene, plan
 from ftplan_ros.core.angles import configuration_difference, wrap_angle
 from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.failure_planes import crossing_segments, failure_plane_hits
+from ftplan_ros.core.failure_planes import FailurePlaneHit, crossing_segments, failure_plane_hits
+from ftplan_ros.core.failure_surface import choose_hits, nearest_hits, smallest_windows
 from ftplan_ros.core.manifolds import (
     mark_obstacle_free,
     project_to_preimage,
@@ -159,3 +160,23 @@ def test_a_loop_free_all_round_comes_as_two_laps(goal_branches):
         assert arc.count == 2 * len(branch) and arc.lap == len(branch)
         points = branch.arc_points(arc.first, arc.count)
         assert np.allclose(points[arc.lap:], points[:arc.lap] + branch.period)
+
+
+def test_nearest_hits_picks_the_hit_nearest_each_windows_middle():
+    """The batched choice against its definition: inside the window, nearest the middle."""
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        hits = [[FailurePlaneHit(j, np.full(3, float(k)), float(p))
+                 for k, p in enumerate(np.round(rng.uniform(0, 20, rng.integers(1, 6)), 1))]
+                for j in range(3)]
+        windows = smallest_windows(hits)
+        chosen = nearest_hits(hits, windows)
+        for window, row in zip(windows, chosen, strict=True):
+            middle = 0.5 * (window[0] + window[1])
+            for joint_hits, k in zip(hits, row, strict=True):
+                inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
+                assert joint_hits[k] is min(inside, key=lambda h: abs(h.position - middle))
+            assert [h.position for h in choose_hits(hits, window)] == \
+                [joint_hits[k].position for joint_hits, k in zip(hits, row, strict=True)]
+    with pytest.raises(ValueError, match='holds no hit'):
+        nearest_hits([[FailurePlaneHit(0, np.zeros(3), 5.0)]], [(0.0, 1.0)])

@@ -258,12 +258,28 @@ def smallest_windows(hits: list[list[FailurePlaneHit]]) -> list[tuple[float, flo
 def choose_hits(hits: list[list[FailurePlaneHit]], window: tuple[float, float],
                 ) -> list[FailurePlaneHit]:
     """One hit per joint inside the window: the one nearest its middle."""
-    middle = 0.5 * (window[0] + window[1])
-    chosen = []
-    for joint_hits in hits:
-        inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
-        chosen.append(min(inside, key=lambda h: abs(h.position - middle)))
-    return chosen
+    return [joint_hits[k] for joint_hits, k in zip(hits, nearest_hits(hits, [window])[0],
+                                                   strict=True)]
+
+
+def nearest_hits(hits: list[list[FailurePlaneHit]], windows: list[tuple[float, float]],
+                 ) -> np.ndarray:
+    """Pick `choose_hits`'s hit of each joint in each of many windows: indices (w, J).
+
+    Raises ValueError when a window holds no hit of some joint.
+    """
+    windows = np.asarray(windows, dtype=float).reshape(-1, 2)
+    middle = 0.5 * (windows[:, 0] + windows[:, 1])
+    out = np.empty((len(windows), len(hits)), dtype=np.int64)
+    for j, joint_hits in enumerate(hits):
+        positions = np.array([hit.position for hit in joint_hits], dtype=float)
+        inside = (positions >= windows[:, :1]) & (positions <= windows[:, 1:])
+        if not inside.any(axis=1).all():
+            raise ValueError(f'a window holds no hit of the joint in slot {j}')
+        # The first of equally near hits, as min() takes it.
+        out[:, j] = np.argmin(np.where(inside, np.abs(positions - middle[:, None]), np.inf),
+                              axis=1)
+    return out
 
 
 def _thin(points: np.ndarray, indices: np.ndarray, spacing: float) -> np.ndarray:

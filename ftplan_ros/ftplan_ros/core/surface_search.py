@@ -33,6 +33,7 @@ from .failure_surface import (
     build_failure_surface,
     choose_hits,
     lift_goal_arc,
+    nearest_hits,
     smallest_windows,
 )
 from .manifolds import (
@@ -322,9 +323,14 @@ class SurfaceSearch:
                 for slot, position, theta in zip(which, positions, thetas, strict=True):
                     hits[slot][k].append(FailurePlaneHit(i, theta, float(position)))
             for slot, c in enumerate(members):
-                for window in (w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]):
-                    fans.append([h.theta for h in choose_hits(hits[slot], window)])
-                    proposals.append((int(c), a, window))
+                windows = [w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]]
+                if not windows:
+                    continue
+                chosen = nearest_hits(hits[slot], windows)
+                fans.extend([[joint_hits[k].theta for joint_hits, k in zip(hits[slot], row,
+                                                                          strict=True)]
+                             for row in chosen])
+                proposals.extend((int(c), a, window) for window in windows)
         if not fans:
             return []
         fans = _coarse_fans(candidates, arc_points, proposals, np.array(fans), self.joints,
