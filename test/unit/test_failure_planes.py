@@ -8,7 +8,12 @@ from ftplan_ros.core import load_scene, plan
 from ftplan_ros.core.angles import configuration_difference, wrap_angle
 from ftplan_ros.core.collision import CollisionChecker
 from ftplan_ros.core.failure_planes import FailurePlaneHit, crossing_segments, failure_plane_hits
-from ftplan_ros.core.failure_surface import choose_hits, nearest_hits, smallest_windows
+from ftplan_ros.core.failure_surface import (
+    choose_hits,
+    hit_positions,
+    nearest_hits,
+    smallest_windows,
+)
 from ftplan_ros.core.manifolds import (
     mark_obstacle_free,
     project_to_preimage,
@@ -165,18 +170,19 @@ def test_a_loop_free_all_round_comes_as_two_laps(goal_branches):
 def test_nearest_hits_picks_the_hit_nearest_each_windows_middle():
     """The batched choice against its definition: inside the window, nearest the middle."""
     rng = np.random.default_rng(4)
-    for _ in range(200):
-        hits = [[FailurePlaneHit(j, np.full(3, float(k)), float(p))
-                 for k, p in enumerate(np.round(rng.uniform(0, 20, rng.integers(1, 6)), 1))]
-                for j in range(3)]
-        windows = smallest_windows(hits)
-        chosen = nearest_hits(hits, windows)
-        for window, row in zip(windows, chosen, strict=True):
+    for _ in range(100):
+        hits = [[[FailurePlaneHit(j, np.full(3, float(k)), float(p))
+                  for k, p in enumerate(np.round(rng.uniform(0, 20, rng.integers(1, 6)), 1))]
+                 for j in range(3)] for _ in range(rng.integers(1, 4))]
+        windows = [(s, w) for s, per_start in enumerate(hits) for w in smallest_windows(per_start)]
+        chosen = nearest_hits(hit_positions(hits), [w for _, w in windows],
+                              [s for s, _ in windows])
+        for (s, window), row in zip(windows, chosen, strict=True):
             middle = 0.5 * (window[0] + window[1])
-            for joint_hits, k in zip(hits, row, strict=True):
+            for joint_hits, k in zip(hits[s], row, strict=True):
                 inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
                 assert joint_hits[k] is min(inside, key=lambda h: abs(h.position - middle))
-            assert [h.position for h in choose_hits(hits, window)] == \
-                [joint_hits[k].position for joint_hits, k in zip(hits, row, strict=True)]
+            assert [h.position for h in choose_hits(hits[s], window)] == \
+                [joint_hits[k].position for joint_hits, k in zip(hits[s], row, strict=True)]
     with pytest.raises(ValueError, match='holds no hit'):
-        nearest_hits([[FailurePlaneHit(0, np.zeros(3), 5.0)]], [(0.0, 1.0)])
+        choose_hits([[FailurePlaneHit(0, np.zeros(3), 5.0)]], (0.0, 1.0))

@@ -258,28 +258,35 @@ def smallest_windows(hits: list[list[FailurePlaneHit]]) -> list[tuple[float, flo
 def choose_hits(hits: list[list[FailurePlaneHit]], window: tuple[float, float],
                 ) -> list[FailurePlaneHit]:
     """One hit per joint inside the window: the one nearest its middle."""
-    return [joint_hits[k] for joint_hits, k in zip(hits, nearest_hits(hits, [window])[0],
-                                                   strict=True)]
+    chosen = nearest_hits(hit_positions([hits]), [window], [0])[0]
+    return [joint_hits[k] for joint_hits, k in zip(hits, chosen, strict=True)]
 
 
-def nearest_hits(hits: list[list[FailurePlaneHit]], windows: list[tuple[float, float]],
-                 ) -> np.ndarray:
-    """Pick `choose_hits`'s hit of each joint in each of many windows: indices (w, J).
+def hit_positions(hits: list[list[list[FailurePlaneHit]]]) -> np.ndarray:
+    """Positions (S, J, H) of the hits of each start and joint along the arc, NaN-padded."""
+    most = max((len(joint_hits) for per_start in hits for joint_hits in per_start), default=0)
+    out = np.full((len(hits), len(hits[0]) if hits else 0, most), np.nan)
+    for s, per_start in enumerate(hits):
+        for j, joint_hits in enumerate(per_start):
+            out[s, j, :len(joint_hits)] = [hit.position for hit in joint_hits]
+    return out
 
-    Raises ValueError when a window holds no hit of some joint.
+
+def nearest_hits(positions: np.ndarray, windows: list[tuple[float, float]],
+                 starts: list[int]) -> np.ndarray:
+    """Pick `choose_hits`'s hit of each joint for many (start, window) pairs: indices (w, J).
+
+    `positions` (S, J, H) come from `hit_positions`; window k belongs to start
+    `starts[k]`. Raises ValueError when a window holds no hit of some joint.
     """
     windows = np.asarray(windows, dtype=float).reshape(-1, 2)
+    mine = positions[np.asarray(starts, dtype=np.int64)]  # (w, J, H)
+    inside = (mine >= windows[:, :1, None]) & (mine <= windows[:, 1:, None])
+    if not inside.any(axis=2).all():
+        raise ValueError('a window holds no hit of some joint')
     middle = 0.5 * (windows[:, 0] + windows[:, 1])
-    out = np.empty((len(windows), len(hits)), dtype=np.int64)
-    for j, joint_hits in enumerate(hits):
-        positions = np.array([hit.position for hit in joint_hits], dtype=float)
-        inside = (positions >= windows[:, :1]) & (positions <= windows[:, 1:])
-        if not inside.any(axis=1).all():
-            raise ValueError(f'a window holds no hit of the joint in slot {j}')
-        # The first of equally near hits, as min() takes it.
-        out[:, j] = np.argmin(np.where(inside, np.abs(positions - middle[:, None]), np.inf),
-                              axis=1)
-    return out
+    # The first of equally near hits, as min() takes it.
+    return np.argmin(np.where(inside, np.abs(mine - middle[:, None, None]), np.inf), axis=2)
 
 
 def _thin(points: np.ndarray, indices: np.ndarray, spacing: float) -> np.ndarray:

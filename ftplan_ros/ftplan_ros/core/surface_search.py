@@ -32,6 +32,7 @@ from .failure_surface import (
     FailureSurface,
     build_failure_surface,
     choose_hits,
+    hit_positions,
     lift_goal_arc,
     nearest_hits,
     smallest_windows,
@@ -322,15 +323,18 @@ class SurfaceSearch:
                                                            points, i)
                 for slot, position, theta in zip(which, positions, thetas, strict=True):
                     hits[slot][k].append(FailurePlaneHit(i, theta, float(position)))
-            for slot, c in enumerate(members):
-                windows = [w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]]
-                if not windows:
-                    continue
-                chosen = nearest_hits(hits[slot], windows)
-                fans.extend([[joint_hits[k].theta for joint_hits, k in zip(hits[slot], row,
-                                                                          strict=True)]
-                             for row in chosen])
-                proposals.extend((int(c), a, window) for window in windows)
+            windows, owners = [], []
+            for slot in range(len(members)):
+                mine = [w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]]
+                windows += mine
+                owners += [slot] * len(mine)
+            if not windows:
+                continue
+            chosen = nearest_hits(hit_positions(hits), windows, owners)
+            for slot, window, row in zip(owners, windows, chosen, strict=True):
+                fans.append([joint_hits[k].theta for joint_hits, k in zip(hits[slot], row,
+                                                                          strict=True)])
+                proposals.append((int(members[slot]), a, window))
         if not fans:
             return []
         fans = _coarse_fans(candidates, arc_points, proposals, np.array(fans), self.joints,
