@@ -583,6 +583,9 @@ class _SheetBuilder:
 
 # [rad] largest step between the goals of neighbouring columns (the goal row's chords)
 _GOAL_STEP = 0.15
+# [cells] longest straight cut of a route: the self-check quarters a triangle a bounded
+# number of times, so a triangle many cells wide near an obstacle would go uncertified
+_LONGEST_CUT = 16
 
 
 class _TriangleCheck:
@@ -664,7 +667,8 @@ def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.
               periodic: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Drop route points (r, 2) while the straight cut between the kept ones stays in mask.
 
-    Returns the kept points and the cells (c, 2) their segments pass through.
+    A cut spans at most `_LONGEST_CUT` cells along each axis. Returns the kept points and
+    the cells (c, 2) their segments pass through.
     """
     offsets = (points - lower) / step
     kept = [0]
@@ -672,7 +676,8 @@ def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.
     while k < len(points) - 1:
         far = k + 1
         for candidate in range(k + 2, len(points)):
-            if not _segment_free(mask, offsets[k], offsets[candidate], periodic):
+            if np.max(np.abs(offsets[candidate] - offsets[k])) > _LONGEST_CUT or \
+                    not _segment_free(mask, offsets[k], offsets[candidate], periodic):
                 break
             far = candidate
         kept.append(far)
