@@ -379,6 +379,8 @@ def test_label_components_finds_the_components_round_the_torus():
         found.cells(np.array([False]))
     with pytest.raises(ValueError, match='within the grid'):
         found.at(np.array([[0, 4, 0]]))
+    with pytest.raises(ValueError, match='must have the shape'):
+        found.holding(np.ones((4, 4, 3), bool))
 
 
 # G from both sides ----------------------------------------------------------------------

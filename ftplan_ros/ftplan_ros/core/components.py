@@ -45,9 +45,12 @@ class Components:
 
     def holding(self, seeds: np.ndarray) -> np.ndarray:
         """(count + 1,) bool: the components that hold a cell of `seeds` (the mask's shape)."""
+        seeds = np.ascontiguousarray(seeds, dtype=np.bool_)
+        if seeds.shape != self.shape:
+            raise ValueError(f'seeds must have the shape {self.shape}, got {seeds.shape}')
         out = np.zeros(self.count + 1, dtype=np.bool_)
         _holding(self.first, self.starts, self.ends, self.number, self._sizes(), self._strides(),
-                 self.axes, np.ascontiguousarray(seeds, dtype=np.bool_).ravel(), out)
+                 self.axes, seeds.ravel(), out)
         return out
 
     def cells(self, chosen: np.ndarray) -> np.ndarray:
@@ -209,19 +212,11 @@ def _runs(mask, shape, axes, joined, wrap):
     first = np.empty(lines + 1, dtype=np.int64)  # line l holds runs first[l]..first[l+1]-1
     starts = np.empty(lines * ((size_r + 1) // 2), dtype=np.int32)
     ends = np.empty_like(starts)
-    count = 0
-    for line in range(lines):
-        first[line] = count
-        base = (line // size_q) * step_p + (line % size_q) * step_q
-        r = 0
-        while r < size_r:
-            if mask[base + r * step_r]:
-                starts[count] = r
-                while r + 1 < size_r and mask[base + (r + 1) * step_r]:
-                    r += 1
-                ends[count] = r
-                count += 1
-            r += 1
+    if step_q == 1 and step_r != 1:
+        count = _plane_runs(mask, size_p, size_q, size_r, step_p, step_r, first, starts, ends)
+    else:
+        count = _line_runs(mask, size_p, size_q, size_r, step_p, step_q, step_r, first, starts,
+                           ends)
     first[lines] = count
     parent = np.arange(count, dtype=np.int32)
     # Each pair of neighbouring lines once: the neighbours one step back (as C order).
@@ -255,6 +250,61 @@ def _runs(mask, shape, axes, joined, wrap):
         else:
             number[run] = number[root]  # a root is the smallest run of its tree: numbered
     return first, starts[:count].copy(), ends[:count].copy(), number, components
+
+
+@numba.njit(cache=True)
+def _line_runs(mask, size_p, size_q, size_r, step_p, step_q, step_r, first, starts, ends):
+    """Find `_runs`'s runs line by line; fill first[:-1], starts and ends, return their number."""
+    count = 0
+    for line in range(size_p * size_q):
+        first[line] = count
+        base = (line // size_q) * step_p + (line % size_q) * step_q
+        r = 0
+        while r < size_r:
+            if mask[base + r * step_r]:
+                starts[count] = r
+                while r + 1 < size_r and mask[base + (r + 1) * step_r]:
+                    r += 1
+                ends[count] = r
+                count += 1
+            r += 1
+    return count
+
+
+@numba.njit(cache=True)
+def _plane_runs(mask, size_p, size_q, size_r, step_p, step_r, first, starts, ends):
+    """Find `_runs`'s runs where lines are strided but neighbouring lines lie side by side.
+
+    Each plane of lines is read row by row (step_q = 1, in memory order), with the run
+    open on each line carried along; runs land in a slot of (size_r + 1) // 2 per line
+    and are then packed in line order. Fills first[:-1], starts and ends; returns the
+    number of runs.
+    """
+    slots = (size_r + 1) // 2
+    held = np.zeros(size_p * size_q, dtype=np.int64)
+    opened = np.empty(size_q, dtype=np.int64)
+    for p in range(size_p):
+        opened[:] = -1
+        for r in range(size_r + 1):
+            row = p * step_p + r * step_r
+            for q in range(size_q):
+                inside = r < size_r and mask[row + q]
+                if inside and opened[q] < 0:
+                    opened[q] = r
+                elif not inside and opened[q] >= 0:
+                    line = p * size_q + q
+                    starts[line * slots + held[line]] = opened[q]
+                    ends[line * slots + held[line]] = r - 1
+                    held[line] += 1
+                    opened[q] = -1
+    count = 0
+    for line in range(size_p * size_q):  # packing moves runs down only: never overwrites
+        first[line] = count
+        for k in range(held[line]):
+            starts[count] = starts[line * slots + k]
+            ends[count] = ends[line * slots + k]
+            count += 1
+    return count
 
 
 @numba.njit(cache=True)
