@@ -34,7 +34,7 @@ STAGES = (
     ('paper: verify surfaces', 'surface_search.py', '_verify_best'),
     ('G on the grids', 'tolerant_set.py', 'tolerant_set'),
     ('  cell classes', 'cell_classes.py', 'classify_cells'),
-    ('  labelling', 'components.py', 'layer_labels'),
+    ('  labelling', 'components.py', 'components'),
     ('sheets: build the web', 'web_search.py', '_plan_on'),
     ('verify S_F (either method)', 'verification.py', 'verify_surface'),
     ('prove no plan exists', 'reference.py', 'proves_no'),

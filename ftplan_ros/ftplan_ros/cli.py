@@ -297,7 +297,7 @@ def _describe(scene, result) -> str:
             lines.append(f'  H{joint + 1} ({names[joint]}) hit on M_g^F: '
                          f'{_deg(degrees(hit))} deg')
         lines.append(f'  S_F: {result.surface.paths.shape[0]} paths x '
-                     f'{result.surface.paths.shape[1]} waypoints, minimum clearance '
+                     f'{result.surface.paths.shape[1]} waypoints, smallest clearance sampled '
                      f'{stats["min_clearance_m"]:.3f} m ({stats["criterion"]})')
     line = f'plan time {stats["plan_time_s"]:.3f} s, method {stats.get("method", "?")}, ' \
         f'{stats.get("collision_checks", 0)} clearance queries'

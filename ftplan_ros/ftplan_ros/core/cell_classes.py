@@ -28,6 +28,7 @@ import numba
 import numpy as np
 
 from .distance_kernels import (
+    ROUNDING,
     link_box_clearance,
     planar_joint_points,
     segment_disk_clearance,
@@ -37,8 +38,6 @@ from .distance_kernels import (
 from .robot import PlanarChain
 from .scene import Scene
 
-# [m] every clearance bound gives this much away to float rounding
-_ROUNDING = 1e-9
 # [rad] every arc gives this much away to the rounding of arcsin and arccos near 1
 _ANGLE_ROUNDING = 1e-6
 
@@ -75,12 +74,12 @@ def _link_motion_bound(points, arms, half, k):
     """How far [m] a point of link k can move in a box of half widths `half` (n,) [rad].
 
     `points` (n+1, 2) are the joints at the box's centre; the bound is
-    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), plus 1e-9 m of rounding (see `_link_status`).
+    Σ_a h_a (d_ka + Σ_b R[k, b] h_b), plus `ROUNDING`.
     """
     stretch = 0.0
     for b in range(half.shape[0]):
         stretch += arms[k, b] * half[b]
-    bound = 1e-9
+    bound = ROUNDING
     for a in range(k + 1):
         d0 = np.sqrt((points[k, 0] - points[a, 0]) ** 2 + (points[k, 1] - points[a, 1]) ** 2)
         d1 = np.sqrt((points[k + 1, 0] - points[a, 0]) ** 2
@@ -210,7 +209,7 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
             may_hit[:] = 0
             surely_hit[:] = 0
             for p in range(centres.shape[0]):
-                drift = sphere_drift(points, 2, centres[p, 0], centres[p, 1], half) + _ROUNDING
+                drift = sphere_drift(points, 2, centres[p, 0], centres[p, 1], half) + ROUNDING
                 dx, dy = centres[p, 0] - points[2, 0], centres[p, 1] - points[2, 1]
                 distance = np.sqrt(dx * dx + dy * dy)
                 toward = np.arctan2(dy, dx)
@@ -349,7 +348,7 @@ class JointLattice:
 
         The tool moves by at most Σ_a tip_arm[a] · h_a inside a cell (h the half widths).
         """
-        reach = float(robot.tip_lever_arms() @ (0.5 * self.step)) + tolerance + _ROUNDING
+        reach = float(robot.tip_lever_arms() @ (0.5 * self.step)) + tolerance + ROUNDING
         return _tool_near(np.asarray(robot.link_lengths, dtype=float), self.lower, self.step,
                           self.cells, np.asarray(x, dtype=float)[:2], reach)
 

@@ -35,6 +35,8 @@ FIRST_IS_SPHERE = 0   # the second shape's signed distance at the first's centre
 SECOND_IS_SPHERE = 1  # the first shape's signed distance at the second's centre
 ENCLOSING = 2         # enclosing capsules (see the module docstring)
 
+# [m] every clearance bound gives this much away to float rounding
+ROUNDING = 1e-9
 _GOLDEN_STEPS = 40    # golden-section steps: the segment parameter to 0.618^40 ~ 4e-9
 
 
@@ -390,7 +392,7 @@ def link_box_clearance(points, k, length, direction, half, centres, radii):
             planar = np.sqrt((distance - length) ** 2
                              + 4.0 * distance * length * np.sin(0.5 * turn) ** 2)
         gap = np.sqrt(planar * planar + centres[p, 2] * centres[p, 2])
-        best = min(best, gap - radii[p] - drift - 1e-9)
+        best = min(best, gap - radii[p] - drift - ROUNDING)
     return best
 
 

@@ -204,12 +204,16 @@ class SurfaceSearch:
         """Self-check, best-ranked first: the first surface that passes wins."""
         last_reason = 'every fine web hits an obstacle at a vertex'
         tried = 0
-        for proposal in proposals[:self.options.max_verifications]:
+        ranked = proposals[:self.options.max_verifications]
+        for rank, proposal in enumerate(ranked, start=1):
             surface = self._fine_surface(candidates[proposal.candidate],
                                          arc_points[proposal.arc], proposal.window)
             if surface is None:
                 continue
             tried += 1
+            # A line per surface: one near an obstacle may take seconds to certify, and a
+            # caller's deadline (the planner node's plan_timeout) is checked at each line.
+            self.report(f'self-check of failure surface {rank} of {len(ranked)}')
             verdict = verify_surface(surface, self.checker, self.task,
                                      self.options.verification)
             if verdict.ok:
