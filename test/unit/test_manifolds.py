@@ -10,6 +10,7 @@ from ftplan_ros.core.manifolds import (
     ManifoldCache,
     ManifoldOptions,
     mark_obstacle_free,
+    project_many,
     project_to_preimage,
     self_motion_path,
     trace_self_motion_manifolds,
@@ -115,6 +116,18 @@ def test_projection_into_a_failure_plane_keeps_the_locked_joint(rng):
     # With θ2 fixed the point is out of reach only for θ2 within ~15° of π (links 1 and 2
     # then fold to less than |x| - 1 = 0.26 m): most starts must converge.
     assert solved_count >= 15
+
+
+def test_seeds_that_are_not_finite_do_not_converge_and_leave_the_others_alone(rng):
+    seeds = np.vstack([rng.uniform(-np.pi, np.pi, (6, 3)),
+                       [[np.nan, 0.0, 0.0], [0.0, np.inf, 0.0], [0.0, 0.0, -np.inf]]])
+    x = np.array([1.2, 0.4])
+    solved, converged = project_many(ARM, x, seeds)
+    alone, alone_converged = project_many(ARM, x, seeds[:6])
+    assert not converged[6:].any()
+    assert np.array_equal(converged[:6], alone_converged) and alone_converged.sum() >= 4
+    assert np.array_equal(solved[:6], alone)
+    assert project_many(ARM, x, np.empty((0, 3)))[1].shape == (0,)
 
 
 def test_self_motion_path_joins_two_configurations(rng):
