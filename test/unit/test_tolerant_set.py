@@ -381,6 +381,20 @@ def test_label_components_finds_the_components_round_the_torus():
         found.at(np.array([[0, 4, 0]]))
     with pytest.raises(ValueError, match='must have the shape'):
         found.holding(np.ones((4, 4, 3), bool))
+    for cells in (np.zeros((3, 2), int), np.array([[0.9, 0.2, 3.7]])):
+        with pytest.raises(ValueError, match=r'integer indices \(k, 3\)'):
+            found.at(cells)
+    with pytest.raises(ValueError, match='need 2 choices'):
+        found.cells(np.bool_(True))
+    for across in ((), (-1, 0), (0, 3)):
+        with pytest.raises(ValueError, match='across must name axes'):
+            components(np.ones((4, 4, 4), bool), np.zeros(3, bool), across)
+    with pytest.raises(ValueError, match='3 flags'):
+        components(np.ones((4, 4, 4), bool), np.zeros(2, bool))
+    with pytest.raises(ValueError, match=r'3-D, got shape \(\)'):
+        components(np.bool_(True), np.zeros(3, bool))
+    with pytest.raises(ValueError, match='joint must be'):
+        layer_labels(np.ones((4, 4, 4), bool), 3, np.zeros(3, bool))
 
 
 # G from both sides ----------------------------------------------------------------------

@@ -37,7 +37,12 @@ class Components:
 
     def at(self, cells: np.ndarray) -> np.ndarray:
         """Components (k,) int32 of the cells (k, 3) (indices within the grid); 0 outside."""
-        cells = np.ascontiguousarray(np.reshape(cells, (-1, 3)), dtype=np.int64)
+        cells = np.asarray(cells)
+        if cells.ndim != 2 or cells.shape[1] != 3 or not (
+                cells.size == 0 or np.issubdtype(cells.dtype, np.integer)):
+            raise ValueError(f'cells must be integer indices (k, 3), got {cells.dtype} '
+                             f'{cells.shape}')
+        cells = np.ascontiguousarray(cells, dtype=np.int64)
         if cells.size and not (np.all(cells >= 0) and np.all(cells < self.shape)):
             raise ValueError(f'cells must lie within the grid {self.shape}')
         return _at(self.first, self.starts, self.ends, self.number, self._sizes(), self.axes,
@@ -58,7 +63,7 @@ class Components:
         chosen = np.asarray(chosen, dtype=np.bool_)
         if chosen.shape != (self.count + 1,):
             raise ValueError(f'{self.count} components need {self.count + 1} choices, got '
-                             f'{len(chosen)}')
+                             f'shape {chosen.shape}')
         out = np.zeros(self.shape, dtype=np.bool_)
         _paint(chosen[self.number], self.first, self.starts, self.ends, self._sizes(),
                self._strides(), self.axes, out.ravel())
@@ -86,10 +91,15 @@ def components(mask: np.ndarray, periodic: np.ndarray,
     `across` and not at all along the others; along an axis that `periodic` (3,) marks,
     index 0 and index N-1 differ by one.
     """
+    if np.ndim(mask) != 3:
+        raise ValueError(f'the mask must be 3-D, got shape {np.shape(mask)}')
     mask = np.ascontiguousarray(mask, dtype=np.bool_)
-    if mask.ndim != 3:
-        raise ValueError(f'the mask must be 3-D, got shape {mask.shape}')
-    across = tuple(sorted(across))
+    periodic = np.asarray(periodic, dtype=bool)
+    if periodic.shape != (3,):
+        raise ValueError(f'periodic must hold 3 flags, got shape {periodic.shape}')
+    across = tuple(sorted(set(across)))
+    if not across or not set(across) <= {0, 1, 2}:
+        raise ValueError(f'across must name axes among 0, 1 and 2, got {across}')
     along = across[-1]
     lines = [axis for axis in range(3) if axis != along]
     axes = np.array(lines + [along], dtype=np.int64)
@@ -103,6 +113,8 @@ def components(mask: np.ndarray, periodic: np.ndarray,
 
 def layer_components(mask: np.ndarray, joint: int, periodic: np.ndarray) -> Components:
     """Find the components of each θ_joint-layer of `mask` (cells touching in the layer)."""
+    if joint not in (0, 1, 2):
+        raise ValueError(f'joint must be 0, 1 or 2, got {joint}')
     return components(mask, periodic, tuple(a for a in range(3) if a != joint))
 
 
