@@ -120,7 +120,7 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
         thetas = wrap_configuration(solved[found], robot.periodic)
         covered = np.zeros(len(found), dtype=bool)
         for branch in branches:
-            covered |= _near_branch(robot, thetas, branch, options.step_max)
+            _cover(robot, thetas, covered, branch, options.step_max)
         last_new = -1
         for k in range(len(found)):
             if covered[k]:
@@ -129,7 +129,7 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
             log.debug('branch %d: %d points, closed=%s', len(branches), len(branch),
                       branch.closed)
             branches.append(branch)
-            covered |= _near_branch(robot, thetas, branch, options.step_max)
+            _cover(robot, thetas, covered, branch, options.step_max)
             last_new = found[k]
         if last_new < options.seeds // 2:
             break
@@ -281,9 +281,13 @@ def _continue(robot: Robot, x: np.ndarray, seed: np.ndarray, direction: float,
     return list(points), status == CLOSED, period
 
 
-def _near_branch(robot: Robot, thetas: np.ndarray, branch: SelfMotionManifold,
-                 distance: float) -> np.ndarray:
-    """(S,) bool: configurations (S, n) [rad] within `distance` of a point of the branch."""
-    gaps = configuration_difference(branch.points[None, :, :], thetas[:, None, :],
+def _cover(robot: Robot, thetas: np.ndarray, covered: np.ndarray, branch: SelfMotionManifold,
+           distance: float) -> None:
+    """Mark in `covered` (S,) the configurations (S, n) [rad] within `distance` of the branch.
+
+    Only those not yet covered are measured.
+    """
+    open_ = np.flatnonzero(~covered)
+    gaps = configuration_difference(branch.points[None, :, :], thetas[open_, None, :],
                                     robot.periodic)
-    return np.min(np.linalg.norm(gaps, axis=2), axis=1, initial=np.inf) < distance
+    covered[open_] = np.min(np.linalg.norm(gaps, axis=2), axis=1, initial=np.inf) < distance
