@@ -102,10 +102,10 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
                                 ) -> tuple[SelfMotionManifold, ...]:
     """Step 1: trace every branch of the pre-image of the task point x.
 
-    Seeds come in rounds of `options.seeds` random configurations; while a round's last
-    new branch came from its second half (the search had not settled), another round
-    follows, up to `options.seed_rounds` (arms with joint limits have many branches, each
-    cut into arcs by the limits).
+    Seeds come in rounds of `options.seeds` random configurations; while no branch is
+    found yet, or a round's last new branch came from its second half (the search had not
+    settled), another round follows, up to `options.seed_rounds` (arms with joint limits
+    have many branches, each cut into arcs by the limits).
     """
     options = options or ManifoldOptions()
     x = np.asarray(x, dtype=float)
@@ -131,7 +131,7 @@ def trace_self_motion_manifolds(robot: Robot, x: np.ndarray, rng: np.random.Gene
             branches.append(branch)
             _cover(robot, thetas, covered, branch, options.step_max)
             last_new = found[k]
-        if last_new < options.seeds // 2:
+        if branches and last_new < options.seeds // 2:
             break
     if not branches:
         log.info('no configuration reaches %s', x)
