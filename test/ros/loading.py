@@ -102,8 +102,12 @@ class LoadRun:
         self.executor.add_node(self.node)
         self._lock = threading.Lock()
         self.sets: dict[str, tuple] = {obstacle_set_key(scene.obstacles): scene.obstacles}
-        self.surfaces: list[np.ndarray] = []
-        self.trajectories: dict[str, np.ndarray] = {}
+        # The node publishes each plan's S_F and then its trajectory, in one callback: the
+        # k-th S_F received belongs to the k-th trajectory (plans with equal nominal paths
+        # are told apart this way).
+        self.surfaces: list[np.ndarray | None] = []
+        self.trajectories: dict[str, tuple[int, np.ndarray | None]] = {}
+        self._trajectory_count = 0
         self.statuses: dict[str, object] = {}
         self.results: list[tuple[float, object]] = []
         # Every plan's results, not only the last: a deep queue on the latched topics.
@@ -123,7 +127,7 @@ class LoadRun:
         try:
             web = read_failure_surface(msg)
         except ValueError:
-            return
+            web = None
         with self._lock:
             self.surfaces.append(web)
 
@@ -131,9 +135,11 @@ class LoadRun:
         try:
             positions = read_joint_trajectory(msg, list(self.scene.robot.joint_names)).positions
         except ValueError:
-            return
+            positions = None
         with self._lock:
-            self.trajectories[stamp_key(msg.header.stamp)] = positions
+            self.trajectories[stamp_key(msg.header.stamp)] = (self._trajectory_count,
+                                                               positions)
+            self._trajectory_count += 1
 
     def _diagnostics(self, msg) -> None:
         for status in msg.status:
@@ -227,12 +233,15 @@ class LoadRun:
                 continue
             report.plans += 1
             obstacles = self.sets.get(status.values.get('obstacle_set', '')) if status else None
-            nominal = self.trajectories.get(key)
-            web = next((w for w in self.surfaces if nominal is not None and
-                        w.shape[1:] == nominal.shape and
-                        np.any(np.all(w == nominal[None], axis=(1, 2)))), None)
-            if obstacles is None or web is None:
+            index, nominal = self.trajectories.get(key, (len(self.surfaces), None))
+            web = self.surfaces[index] if index < len(self.surfaces) else None
+            if obstacles is None or web is None or nominal is None:
                 report.unverified += 1
+                continue
+            if web.shape[1:] != nominal.shape or \
+                    not np.any(np.all(web == nominal[None], axis=(1, 2))):
+                report.unsound.append(f'plan {key}: the S_F published with it does not hold '
+                                      'its nominal path')
                 continue
             checker = CollisionChecker(robot, obstacles)
             segments = np.stack([web[:, :-1], web[:, 1:]], axis=2).reshape(-1, 2, web.shape[2])
