@@ -33,10 +33,11 @@ START = X_S['position'] + X_S['orientation']
 GOAL = X_G['position'] + X_G['orientation']
 
 
-def start_nodes(ros, scene_file, drill, **parameters):
+def start_nodes(ros, scene_file, drill, speed=2.0, **parameters):
+    """Start the four nodes; the executor moves at `speed` [rad/s], the sim can do twice it."""
     ros.make(PlannerNode, scene_file, **parameters)
-    ros.make(ExecutorNode, scene_file, max_joint_speed=2.0, **parameters)
-    ros.make(SimNode, scene_file, max_joint_speed=4.0, **parameters)
+    ros.make(ExecutorNode, scene_file, max_joint_speed=speed, **parameters)
+    ros.make(SimNode, scene_file, max_joint_speed=2.0 * speed, **parameters)
     return ros.make(InjectorNode, scene_file, drills=[drill], **parameters)
 
 
@@ -82,7 +83,10 @@ def test_a_lock_of_a_tolerated_joint_is_recovered_to_the_goal_without_collision(
 def test_a_lock_of_a_joint_the_plan_does_not_tolerate_stops_the_arm_safely(ros, tmp_path):
     """The robot comes from /robot_description to all four nodes; the elbow locks."""
     scene_file = panda_scene(tmp_path, robot=False)
-    injector = start_nodes(ros, scene_file, 'panda_joint4@0.4', **description_parameters())
+    # Slowly: on a loaded machine the sim once applied the lock 0.2 s late, at 93 % of the
+    # path, where S_F does hold a recovery for the elbow (and the executor rightly took it).
+    injector = start_nodes(ros, scene_file, 'panda_joint4@0.4', speed=0.5,
+                           **description_parameters())
     ros.probe.listen(JointState, '/joint_states', 1000)
     ros.probe.publish(String, '/robot_description', String(data=PANDA_URDF.read_text()),
                       LATCHED_QOS)
