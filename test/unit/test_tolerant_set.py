@@ -26,7 +26,7 @@ from ftplan_ros.core.cell_classes import (
     supports,
     triangle_free,
 )
-from ftplan_ros.core.components import components, label_components, layer_labels
+from ftplan_ros.core.components import components, layer_components
 from ftplan_ros.core.distance_kernels import planar_link_clearances
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.robot import PlanarChain
@@ -350,9 +350,10 @@ def test_label_components_finds_the_components_round_the_torus():
         periodic = rng.random(3) < 0.5
         joint = int(rng.integers(3))
         if trial % 2:
-            labels, structure = label_components(mask, periodic), np.ones((3, 3, 3), bool)
+            labels, structure = components(mask, periodic).labels(), np.ones((3, 3, 3), bool)
         else:
-            labels, structure = layer_labels(mask, joint, periodic), np.zeros((3, 3, 3), bool)
+            labels = layer_components(mask, joint, periodic).labels()
+            structure = np.zeros((3, 3, 3), bool)
             structure[(slice(None),) * joint + (1,)] = True  # one layer: index 1 along it
         assert labels.dtype == np.int32
         assert np.all((labels > 0) == mask)
@@ -373,7 +374,7 @@ def test_label_components_finds_the_components_round_the_torus():
         holding[labels[seeds & mask]] = True
         assert np.array_equal(found.holding(seeds), holding)
     for shape in ((0, 3, 3), (3, 3, 0)):  # no cell: no component, and no write outside
-        assert label_components(np.zeros(shape, bool), np.ones(3, bool)).shape == shape
+        assert components(np.zeros(shape, bool), np.ones(3, bool)).labels().shape == shape
     found = components(np.ones((4, 4, 4), bool), np.zeros(3, bool))
     with pytest.raises(ValueError, match='need 2 choices'):
         found.cells(np.array([False]))
@@ -394,7 +395,7 @@ def test_label_components_finds_the_components_round_the_torus():
     with pytest.raises(ValueError, match=r'3-D, got shape \(\)'):
         components(np.bool_(True), np.zeros(3, bool))
     with pytest.raises(ValueError, match='joint must be'):
-        layer_labels(np.ones((4, 4, 4), bool), 3, np.zeros(3, bool))
+        layer_components(np.ones((4, 4, 4), bool), 3, np.zeros(3, bool))
 
 
 # G from both sides ----------------------------------------------------------------------

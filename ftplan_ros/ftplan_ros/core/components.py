@@ -118,17 +118,6 @@ def layer_components(mask: np.ndarray, joint: int, periodic: np.ndarray) -> Comp
     return components(mask, periodic, tuple(a for a in range(3) if a != joint))
 
 
-def label_components(mask: np.ndarray, periodic: np.ndarray,
-                     across: tuple[int, ...] = (0, 1, 2)) -> np.ndarray:
-    """Label the components of `mask` (see `components`): int32 (N0, N1, N2)."""
-    return components(mask, periodic, across).labels()
-
-
-def layer_labels(mask: np.ndarray, joint: int, periodic: np.ndarray) -> np.ndarray:
-    """Label the components of each θ_joint-layer of `mask` (cells touching in the layer)."""
-    return layer_components(mask, joint, periodic).labels()
-
-
 @numba.njit(cache=True)
 def _line_base(line, sizes, strides, axes):
     """Flat index of the first cell of line `line`."""

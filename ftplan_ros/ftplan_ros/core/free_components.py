@@ -17,7 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .cell_classes import classify_cells, supports
-from .components import label_components, layer_labels
+from .components import Components, components, layer_components
 from .robot import Robot
 from .scene import Obstacle, Scene
 
@@ -39,8 +39,8 @@ class FreeComponents:
         classes = classify_cells(scene, cells, margin=margin)
         self.lattice = classes.lattice
         self.possible = classes.possible
-        self.labels = label_components(classes.possible, self.lattice.periodic)
-        self._layers: dict[int, np.ndarray] = {}
+        self.found = components(classes.possible, self.lattice.periodic)
+        self._layers: dict[int, Components] = {}
 
     @classmethod
     def where_it_applies(cls, robot: Robot, obstacles: Sequence[Obstacle],
@@ -63,12 +63,12 @@ class FreeComponents:
         if held is not None and points[0, held] != points[1, held]:
             return False
         cells = self.lattice.cell_of(points)
-        labels = self.labels if held is None else self._layer_labels(held)
-        first, second = labels[tuple(cells.T)]
+        found = self.found if held is None else self._layer_components(held)
+        first, second = found.at(cells)
         return bool(first == 0 or second == 0 or first != second)
 
-    def _layer_labels(self, joint: int) -> np.ndarray:
+    def _layer_components(self, joint: int) -> Components:
         """Return the components of each θ_joint-layer's possibly free cells (cached)."""
         if joint not in self._layers:
-            self._layers[joint] = layer_labels(self.possible, joint, self.lattice.periodic)
+            self._layers[joint] = layer_components(self.possible, joint, self.lattice.periodic)
         return self._layers[joint]

@@ -348,8 +348,8 @@ def project_seeds(kind: int, parameters: np.ndarray, target: np.ndarray, thetas:
     Moves the seeds in place and returns their residual norms (N,) at the end. Only the
     `movable` joints step; each step is at most 0.5 rad long, and joints that are not
     `periodic` are clipped to [lower, upper] after it. A seed stops once its residual
-    is below `tolerance`; one that is not finite, or whose residual is not, gets an
-    infinite residual norm.
+    is below `tolerance`; one whose residual or Jacobian is not finite (a seed that is
+    not) gets an infinite residual norm.
     """
     count, n = thetas.shape
     columns = np.flatnonzero(movable)
@@ -358,9 +358,6 @@ def project_seeds(kind: int, parameters: np.ndarray, target: np.ndarray, thetas:
         theta = np.ascontiguousarray(thetas[k])
         error = np.inf
         for iteration in range(max_iterations + 1):
-            if not np.all(np.isfinite(theta)):
-                error = np.inf
-                break
             residual, jac = task_residual(kind, parameters, target, theta)
             error = np.sqrt(residual @ residual)
             if not np.isfinite(error) or not np.all(np.isfinite(jac)):
