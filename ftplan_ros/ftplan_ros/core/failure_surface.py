@@ -97,8 +97,8 @@ class FailureSurface:
     @cached_property
     def triangle_ranges(self) -> tuple[np.ndarray, np.ndarray]:
         """(T, n) smallest and largest value [rad] of each joint over each triangle's corners."""
-        corners = self.vertices[self.triangles]
-        return corners.min(axis=1), corners.max(axis=1)
+        a, b, c = (self.vertices[self.triangles[:, k]] for k in range(3))
+        return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
 
     def triangles_beside_path_edge(self, k: int, w: int) -> list[int]:
         """List the (one or two) triangles that have path k's edge (w, w+1) as a side."""
@@ -146,9 +146,17 @@ class FailureSurface:
 
     @cached_property
     def vertex_ids(self) -> np.ndarray:
-        """(V,) one number per distinct point: vertices with equal coordinates are one point."""
-        _, ids = np.unique(self.vertices, axis=0, return_inverse=True)
-        return ids.reshape(-1)
+        """(V,) one number per distinct point: vertices with equal coordinates are one point.
+
+        Points are numbered in lexicographic order of their coordinates.
+        """
+        vertices = self.vertices
+        order = np.lexsort(vertices.T[::-1])  # sorts by joint 1, then 2, ...
+        ordered = vertices[order]
+        fresh = np.concatenate([[True], np.any(ordered[1:] != ordered[:-1], axis=1)])
+        ids = np.empty(len(vertices), dtype=np.int64)
+        ids[order] = np.cumsum(fresh) - 1
+        return ids
 
     @cached_property
     def edge_ids(self) -> np.ndarray:

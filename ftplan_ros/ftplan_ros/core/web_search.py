@@ -244,17 +244,7 @@ def _nominal_path(grid: TolerantSet, theta_s: np.ndarray, cells: np.ndarray,
         points.append(points[-1] + _step(centre - points[-1], periodic))
     points = np.array(points)
     offsets = (points - lattice.lower) / lattice.step
-    inside = grid.certified_all
-    kept, k = [0], 0
-    while k < len(points) - 1:
-        far = k + 1
-        for candidate in range(k + 2, len(points)):
-            if not _walk_free3(inside, offsets[k], offsets[candidate], periodic):
-                break
-            far = candidate
-        kept.append(far)
-        k = far
-    gamma = points[kept]
+    gamma = points[_greedy_cuts(grid.certified_all, periodic, offsets, np.inf)]
     keep = np.concatenate([[True], np.any(np.diff(gamma, axis=0) != 0.0, axis=1)])
     return gamma[keep]
 
@@ -671,17 +661,7 @@ def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.
     the cells (c, 2) their segments pass through.
     """
     offsets = (points - lower) / step
-    kept = [0]
-    k = 0
-    while k < len(points) - 1:
-        far = k + 1
-        for candidate in range(k + 2, len(points)):
-            if np.max(np.abs(offsets[candidate] - offsets[k])) > _LONGEST_CUT or \
-                    not _segment_free(mask, offsets[k], offsets[candidate], periodic):
-                break
-            far = candidate
-        kept.append(far)
-        k = far
+    kept = _greedy_cuts(mask, periodic, offsets, _LONGEST_CUT)
     covered = [_segment_walk(offsets[a], offsets[b]) for a, b in zip(kept[:-1], kept[1:],
                                                                       strict=True)]
     covered.append(_segment_walk(offsets[-1], offsets[-1]))
@@ -756,22 +736,53 @@ def _segment_walk(a, b):
     return cells
 
 
+def _greedy_cuts(mask: np.ndarray, periodic: np.ndarray, offsets: np.ndarray,
+                 longest: float) -> np.ndarray:
+    """Return the indices of the points (r, d) [cell units] a path keeps, cut straight in mask.
+
+    From each kept point the path jumps to the farthest later point before the first
+    whose straight cut leaves the mask's cells or spans more than `longest` cells along
+    an axis; the first and last points are kept.
+    """
+    return _greedy_cuts_kernel(np.ascontiguousarray(mask).ravel(), np.array(mask.shape),
+                               periodic.astype(np.bool_), np.ascontiguousarray(offsets),
+                               float(longest))
+
+
 @numba.njit(cache=True)
-def _walk_free3(mask, a, b, periodic):
-    """Whether every 3-D cell the segment a-b (in cell units) passes through is in mask."""
-    size = mask.shape[0]
-    index = np.empty(3, dtype=np.int64)
+def _greedy_cuts_kernel(mask, shape, periodic, offsets, longest):
+    kept = np.empty(offsets.shape[0], dtype=np.int64)
+    kept[0] = 0
+    count = 1
+    k = 0
+    while k < offsets.shape[0] - 1:
+        far = k + 1
+        for candidate in range(k + 2, offsets.shape[0]):
+            if np.max(np.abs(offsets[candidate] - offsets[k])) > longest or \
+                    not _cut_free(mask, shape, periodic, offsets[k], offsets[candidate]):
+                break
+            far = candidate
+        kept[count] = far
+        count += 1
+        k = far
+    return kept[:count]
+
+
+@numba.njit(cache=True)
+def _cut_free(mask, shape, periodic, a, b):
+    """Whether every cell the segment a-b (in cell units) passes through is in the flat mask."""
     middles = _piece_middles(a, b)
     for k in range(middles.shape[0]):
         t = middles[k]
-        for axis in range(3):
+        flat = 0
+        for axis in range(a.shape[0]):
             value = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
             if periodic[axis]:
-                value %= size
-            elif value < 0 or value >= size:
+                value %= shape[axis]
+            elif value < 0 or value >= shape[axis]:
                 return False
-            index[axis] = value
-        if not mask[index[0], index[1], index[2]]:
+            flat = flat * shape[axis] + value
+        if not mask[flat]:
             return False
     return True
 
@@ -888,7 +899,8 @@ def load_sheet_kernels() -> None:
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
     _segment_free(mask[0], np.zeros(2), np.ones(2), grid.lattice.periodic[1:])
     _segment_walk(np.zeros(2), np.ones(2))
-    _walk_free3(mask, np.zeros(3), np.ones(3), grid.lattice.periodic)
+    _greedy_cuts(mask, grid.lattice.periodic, np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]), 16)
+    _greedy_cuts(mask[0], grid.lattice.periodic[1:], np.array([[0.0, 0], [1, 1], [2, 2]]), 16)
     _triangle_free(mask[0], np.zeros(2), np.ones(2), np.array([0.0, 1.0]),
                    grid.lattice.periodic[1:])
     _TriangleCheck(scene)(np.eye(3))
