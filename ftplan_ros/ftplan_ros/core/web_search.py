@@ -843,14 +843,31 @@ def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
             if end < 0 and target[s]:
                 end = s
     index = np.empty(dims, dtype=np.int64)
+    jumps = np.zeros(offsets.shape[0], dtype=np.int64)  # flat steps to the neighbours
+    for o in range(offsets.shape[0]):
+        for d in range(dims):
+            jumps[o] = jumps[o] * shape[d] + offsets[o, d]
     head = 0
     while end < 0 and head < tail:
         cell = queue[head]
         head += 1
         rest = cell
+        interior = True
         for d in range(dims - 1, -1, -1):
             index[d] = rest % shape[d]
             rest //= shape[d]
+            interior = interior and 0 < index[d] < shape[d] - 1
+        if interior:  # no neighbour across a face of the grid: flat steps suffice
+            for o in range(offsets.shape[0]):
+                flat = cell + jumps[o]
+                if mask[flat] and parent[flat] == -2:
+                    parent[flat] = cell
+                    queue[tail] = flat
+                    tail += 1
+                    if target[flat]:
+                        end = flat
+                        break
+            continue
         for o in range(offsets.shape[0]):
             flat = 0
             inside = True
