@@ -20,7 +20,7 @@ from ftplan_ros.core.failure_planes import failure_hypercube
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.reference import Existence, decide_existence
 from ftplan_ros.core.verification import VerificationOptions, verify_surface
-from ftplan_ros.core.web_search import METHOD, PAPER_METHOD, _bfs
+from ftplan_ros.core.web_search import METHOD, PAPER_METHOD, _bfs, _greedy_cuts
 from ftplan_ros.crowded import RADII, crowded_scene
 
 HALF_DEGREE = np.radians(0.5)
@@ -228,6 +228,43 @@ def test_the_grid_search_finds_a_shortest_path_through_the_mask():
         gaps = np.where(periodic, np.minimum(gaps, np.array(shape) - gaps), gaps)
         assert gaps.max(initial=0) <= 1, trial
     assert found > 50
+
+
+def test_straight_cuts_stay_in_the_mask_and_within_the_longest_cut():
+    """`_greedy_cuts` on random walks through random masks, 2-D and 3-D, periodic or not.
+
+    A step to the next point is the caller's path and is kept as it is; every longer cut
+    is sampled densely (the cells it passes are found by flooring the samples), so a cut
+    through a cell outside the mask fails the test. Each cut is also checked not to be
+    longer than allowed, and the walk's ends are kept.
+    """
+    rng = np.random.default_rng(5)
+    shortened = 0
+    for trial in range(120):
+        dims = 2 + trial % 2
+        size = 10
+        mask = rng.random((size,) * dims) < 0.8
+        periodic = rng.random(dims) < 0.5
+        steps = rng.integers(-1, 2, (40, dims))
+        walk = np.cumsum(np.vstack([rng.integers(0, size, dims), steps]), axis=0)
+        cells = np.where(periodic, np.mod(walk, size), np.clip(walk, 0, size - 1))
+        mask[tuple(cells.T)] = True  # the walk's own cells are free
+        offsets = np.where(periodic, walk, cells) + 0.5 + rng.uniform(-0.3, 0.3, walk.shape)
+        longest = rng.choice([3.0, 16.0, np.inf])
+        kept = _greedy_cuts(mask, periodic, offsets, longest)
+        assert kept[0] == 0 and kept[-1] == len(offsets) - 1, trial
+        assert np.all(np.diff(kept) > 0), trial
+        for first, last in zip(kept[:-1], kept[1:], strict=True):
+            if last == first + 1:
+                continue
+            a, b = offsets[first], offsets[last]
+            assert np.abs(b - a).max() <= longest, trial
+            samples = np.floor(a + np.linspace(0.0, 1.0, 4001)[:, None] * (b - a)).astype(int)
+            inside = np.all(periodic | ((samples >= 0) & (samples < size)), axis=1)
+            assert inside.all(), trial
+            assert mask[tuple(np.mod(samples, size).T)].all(), trial
+        shortened += len(kept) < len(offsets)
+    assert shortened > 60
 
 
 def test_a_scene_only_the_finest_grid_solves_is_planned_there():
