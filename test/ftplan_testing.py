@@ -9,6 +9,8 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 
 from ftplan_ros.core.scene import Scene, parse_scene
 
@@ -158,3 +160,69 @@ def bot(urdf: Path, task_kind: str = 'position'):
     from ftplan_ros.core.scene import robot_from_urdf
     return robot_from_urdf(urdf.read_text(), 'tcp', tip_offset=BOT_TIP_OFFSET,
                            mesh_dirs=[str(urdf.parent)], task_kind=task_kind)
+
+
+def slice_distance(surface, joint, theta):
+    """Length [rad] of a shortest path from θ to the goal row in the web's slice at θ_joint.
+
+    A referee for `recover`, built from coordinates alone: each triangle's points at the
+    level (corners on it, crossings of its sides) are joined pairwise. Corners with equal
+    coordinates are one point, and so are the crossings of sides whose ends have equal
+    coordinates (the web's sheets are joined where they share points, not where they
+    merely pass through one). The goal row's points (top waypoints, crossings of the top
+    rungs) are the targets. θ, on a nominal segment, is joined to the points of the
+    triangles whose side it lies on.
+    """
+    level = theta[joint]
+    paths = surface.paths
+    n_paths, n_waypoints, n = paths.shape
+    # A path equal to the one before it closes a sheet: no strip joins it to the next.
+    strips = [k for k in range(n_paths - 1) if k == 0 or not np.array_equal(paths[k],
+                                                                             paths[k - 1])]
+    k, w = (index.ravel() for index in np.meshgrid(strips, np.arange(n_waypoints - 1),
+                                                  indexing='ij'))
+
+    def corners_at(*steps):
+        return np.stack([np.stack([k + dk, w + dw], axis=1) for dk, dw in steps], axis=1)
+
+    corners = np.concatenate([corners_at((0, 0), (1, 0), (1, 1)),
+                              corners_at((0, 0), (1, 1), (0, 1))])  # (T, 3, (path, waypoint))
+    slots, keys, tops = [], [], []
+    holds_theta = np.zeros(len(corners), dtype=bool)
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        p = paths[corners[:, a, 0], corners[:, a, 1]]
+        q = paths[corners[:, b, 0], corners[:, b, 1]]
+        on_top = corners[:, a, 1] == n_waypoints - 1
+        slots.append(np.where((p[:, joint] == level)[:, None], p, np.nan))
+        keys.append(np.hstack([p, p]))
+        tops.append(on_top)
+        differ = p != q
+        first = np.argmax(differ, axis=1)
+        swap = (q[np.arange(len(q)), first] < p[np.arange(len(p)), first])[:, None]
+        p, q = np.where(swap, q, p), np.where(swap, p, q)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            crossing = p + ((level - p[:, joint]) / (q[:, joint] - p[:, joint]))[:, None] * (q - p)
+        strict = (p[:, joint] - level) * (q[:, joint] - level) < 0
+        slots.append(np.where(strict[:, None], crossing, np.nan))
+        keys.append(np.hstack([p, q]))
+        tops.append(on_top & (corners[:, b, 1] == n_waypoints - 1))
+        along = np.clip(np.einsum('ij,ij->i', theta - p, q - p)
+                        / np.maximum(np.einsum('ij,ij->i', q - p, q - p), 1e-300), 0.0, 1.0)
+        holds_theta |= np.linalg.norm(p + along[:, None] * (q - p) - theta, axis=1) < 1e-9
+    slots = np.stack(slots + [np.where(holds_theta[:, None], theta, np.nan)], axis=1)
+    used = ~np.isnan(slots).any(axis=2)
+    slots[..., joint] = level
+    keys = np.stack(keys + [np.tile(np.hstack([theta, theta]), (len(corners), 1))], axis=1)
+    tops = np.stack(tops + [np.zeros(len(corners), dtype=bool)], axis=1)
+    _, first, number = np.unique(np.vstack([keys[used], np.hstack([theta, theta])]), axis=0,
+                                 return_index=True, return_inverse=True)
+    points = np.vstack([slots[used], theta[None, :]])[first]
+    slot_node = np.full(used.shape, -1)
+    slot_node[used] = number[:-1]
+    u, v = (slot_node[:, pairs].ravel() for pairs in np.triu_indices(7, 1))
+    keep = (u >= 0) & (v >= 0) & (u != v)
+    arcs = np.unique(np.sort(np.stack([u[keep], v[keep]], axis=1), axis=1), axis=0)
+    weights = np.linalg.norm(points[arcs[:, 0]] - points[arcs[:, 1]], axis=1) + 1e-12
+    graph = coo_matrix((weights, tuple(arcs.T)), shape=(len(points),) * 2)
+    distance = dijkstra(graph, directed=False, indices=number[-1])
+    return distance[np.unique(slot_node[used & tops])].min()

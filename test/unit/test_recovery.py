@@ -1,5 +1,7 @@
 """Step 7: recovery by slicing S_F, checked at every combinatorially distinct lock."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from ftplan_testing import SCENES, paper_scene
@@ -99,3 +101,7 @@ def test_bad_locks_are_rejected(plans):
         recover(result.surface, theta + np.array([0.0, 0.1, 0.0]), 0)
     with pytest.raises(InputError, match='not on the nominal path'):
         recover(result.surface, theta + 10.0, 1)
+    paths = result.surface.paths.copy()
+    paths[-1, -1, 2] = np.inf
+    with pytest.raises(InputError, match='surface: has a point that is not finite'):
+        recover(replace(result.surface, paths=paths), theta, 0)

@@ -15,19 +15,15 @@ curve leaving the lock point between them can only end on the goal row.
 
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass
-from itertools import combinations
 
+import numba
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from .errors import InputError
 from .failure_surface import FailureSurface
 from .paths import path_length
-
-# Each triangle offers up to 7 node slots: 3 vertices, 3 edge crossings and the start.
-_SLOT_PAIRS = np.array(list(combinations(range(7), 2)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,95 +95,153 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
         raise InputError('joint', f'must be in 0..{n_joints - 1}, got {joint}')
     if theta.shape != (n_joints,) or not np.all(np.isfinite(theta)):
         raise InputError('theta', f'must be {n_joints} finite angles')
+    if not np.all(np.isfinite(surface.paths)):
+        raise InputError('surface', 'has a point that is not finite')
     segment, start = locate_on_nominal_path(surface, theta, joint, max_offset)
     # S_F is sliced at the locked value moved into the path's range (by at most max_offset).
-    points, graph, targets = _slice_graph(surface, joint, float(start[joint]), segment, start)
-    source = len(points) - 1
-    distance, predecessor = dijkstra(graph, directed=False, indices=source,
-                                     return_predecessors=True)
-    reachable = targets[np.isfinite(distance[targets])]
-    if len(reachable) == 0:
+    level = float(start[joint])
+    point_of, segment_of = surface.vertex_ids, surface.edge_ids
+    n_points = int(point_of.max()) + 1
+    source = n_points + int(segment_of.max()) + 1  # the start's node id, above all others
+    n_paths, n_waypoints = surface.paths.shape[:2]
+    values = np.ascontiguousarray(surface.vertices[:, joint])
+    top = np.arange(n_paths) * n_waypoints + n_waypoints - 1
+    top_rungs = surface.rung_edge(np.flatnonzero(~surface.cuts), n_waypoints - 1)
+    goal = np.zeros(source + 1, dtype=np.bool_)
+    goal[point_of[top[values[top] == level]]] = True
+    goal[n_points + segment_of[top_rungs]] = True  # strict crossings on the goal row's chords
+    beside_start = np.array([t for t in surface.triangles_beside_path_edge(surface.nominal,
+                                                                           segment)
+                             if surface.live_triangles[t]], dtype=np.int64)
+    route = _slice_route(values, np.ascontiguousarray(surface.vertices), surface.triangles,
+                         surface.triangle_edges, surface.edges, point_of, segment_of,
+                         surface.live_triangles, beside_start, level, joint, start, n_points,
+                         source, goal)
+    if len(route) == 0:
         return None
-    node = reachable[np.argmin(distance[reachable])]
-    route = [node]
-    while route[-1] != source:
-        route.append(predecessor[route[-1]])
-    path = np.vstack([theta[None, :], points[route[::-1]]])
+    path = np.vstack([theta[None, :], route])
     level = float(theta[joint])
     path[:, joint] = level
     return RecoveryPath(joint, level, path)
 
 
-def _slice_graph(surface: FailureSurface, joint: int, level: float, segment: int,
-                 start: np.ndarray) -> tuple[np.ndarray, csr_matrix, np.ndarray]:
-    """Nodes (N, n), weighted arcs and goal-row node ids of S_F ∩ {θ_joint = level}.
+@numba.njit(cache=True)
+def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, segment_of,
+                 live, beside_start, level, joint, start, n_points, source, goal):
+    """Points (k, n) of a shortest path in S_F ∩ {θ_joint = level} from `start` to the goal row.
 
-    Nodes are the web's points on the level and strict crossings of its segments, and the
-    start point comes last; vertices with equal coordinates are one point, and so are
-    segments joining equal points (`FailureSurface.vertex_ids`, `edge_ids`). Vertices with
-    θ_joint >= level count as above; a triangle whose corners are all strictly above or
-    all below holds no node. Triangles of cut strips are not part of S_F.
+    Empty when the slice does not join them. The slice is a graph: its nodes are the web's
+    points on the level (ids `point_of`) and strict crossings of its segments (ids
+    n_points + `segment_of`), and the start (id `source`, the largest); vertices with
+    equal coordinates are one point, and so are segments joining equal points. Vertices
+    with θ_joint >= level count as above; a triangle whose corners are all strictly above
+    or all below holds no node, and the live triangles beside the start's nominal segment
+    hold the start. Arcs join the nodes of a triangle, weighted by their distance; the
+    path ends at the nearest node marked in `goal`.
     """
-    vertices = surface.vertices
-    point_of = surface.vertex_ids
-    n_points_ = int(point_of.max()) + 1
-    segment_of = surface.edge_ids
-    edges = surface.edges
-    values = vertices[:, joint]
-    above = values >= level
-    on_level = values == level
-    live = surface.live_triangles
+    n = vertices.shape[1]
+    beside = np.zeros(triangles.shape[0], dtype=np.bool_)
+    for t in beside_start:
+        beside[t] = True
+    crossing = np.empty(triangles.shape[0], dtype=np.int64)
+    count = 0
+    for t in range(triangles.shape[0]):
+        a, b, c = values[triangles[t, 0]], values[triangles[t, 1]], values[triangles[t, 2]]
+        if beside[t] or (live[t] and min(a, b, c) <= level <= max(a, b, c)):
+            crossing[count] = t
+            count += 1
+    # Up to 7 nodes per triangle: its corners on the level, the crossing of each side
+    # (its upper end if that lies on the level), the start.
+    slots = np.full((count, 7), -1, dtype=np.int64)
+    coordinates = np.empty((count, 7, n))
+    for c in range(count):
+        t = crossing[c]
+        for k in range(3):
+            corner = triangles[t, k]
+            if values[corner] == level:
+                slots[c, k] = point_of[corner]
+                coordinates[c, k] = vertices[corner]
+            side = triangle_edges[t, k]
+            high, low = edges[side, 0], edges[side, 1]
+            if values[high] < level:
+                high, low = low, high
+            if values[low] >= level or values[high] < level:
+                continue  # both ends on one side
+            if values[high] == level:
+                slots[c, 3 + k] = point_of[high]
+                coordinates[c, 3 + k] = vertices[high]
+            else:
+                slots[c, 3 + k] = n_points + segment_of[side]
+                f = (level - values[low]) / (values[high] - values[low])
+                coordinates[c, 3 + k] = vertices[low] + f * (vertices[high] - vertices[low])
+        if beside[t]:
+            slots[c, 6] = source
+            coordinates[c, 6] = start
 
-    lowest, highest = surface.triangle_ranges
-    crossing = live & (lowest[:, joint] <= level) & (highest[:, joint] >= level)
-    beside_start = [t for t in surface.triangles_beside_path_edge(surface.nominal, segment)
-                    if live[t]]
-    crossing[beside_start] = True
-    touches_start = np.zeros(len(crossing), dtype=bool)
-    touches_start[beside_start] = True
-    touches_start = touches_start[crossing]
-    triangles = surface.triangles[crossing]
-    triangle_edges = surface.triangle_edges[crossing]
-
-    # Crossing node of each edge used: the upper end if it lies on the level, else a new point.
-    used = np.unique(triangle_edges)
-    lower, upper = edges[used, 0], edges[used, 1]
-    mixed = above[lower] != above[upper]
-    high = np.where(above[lower], lower, upper)
-    low = np.where(above[lower], upper, lower)
-    node = np.full(len(used), -1)
-    node[mixed & on_level[high]] = point_of[high[mixed & on_level[high]]]
-    strict = mixed & ~on_level[high]
-    node[strict] = n_points_ + segment_of[used[strict]]
-
-    points = np.full((n_points_ + int(segment_of.max()) + 2, vertices.shape[1]), np.nan)
-    points[point_of] = vertices
-    lo, hi = vertices[low[strict]], vertices[high[strict]]
-    t = (level - lo[:, joint]) / (hi[:, joint] - lo[:, joint])
-    points[node[strict]] = lo + t[:, None] * (hi - lo)
-    source = len(points) - 1
-    points[source] = start
+    # Number the nodes in use 0..N-1 in the order of their ids (the start last).
+    local = np.full(source + 1, -1, dtype=np.int64)
+    local[source] = 0
+    for c in range(count):
+        for k in range(7):
+            if slots[c, k] >= 0:
+                local[slots[c, k]] = 0
+    ids = np.flatnonzero(local == 0)
+    local[ids] = np.arange(len(ids))
+    points = np.empty((len(ids), n))
+    points[len(ids) - 1] = start
+    degree = np.zeros(len(ids) + 1, dtype=np.int64)
+    for c in range(count):
+        for k in range(7):
+            if slots[c, k] >= 0:
+                points[local[slots[c, k]]] = coordinates[c, k]
+                for q in range(7):
+                    if q != k and slots[c, q] >= 0 and slots[c, q] != slots[c, k]:
+                        degree[local[slots[c, k]] + 1] += 1
     points[:, joint] = level
+    first = np.cumsum(degree)
+    neighbours = np.empty(first[-1], dtype=np.int64)
+    filled = first[:-1].copy()
+    for c in range(count):
+        for k in range(7):
+            for q in range(7):
+                if q != k and slots[c, k] >= 0 and slots[c, q] >= 0 and \
+                        slots[c, q] != slots[c, k]:
+                    node = local[slots[c, k]]
+                    neighbours[filled[node]] = local[slots[c, q]]
+                    filled[node] += 1
 
-    edge_node = node[np.searchsorted(used, triangle_edges)]
-    slots = np.concatenate([np.where(on_level[triangles], point_of[triangles], -1), edge_node,
-                            np.where(touches_start, source, -1)[:, None]], axis=1)
-    u = slots[:, _SLOT_PAIRS[:, 0]].ravel()
-    v = slots[:, _SLOT_PAIRS[:, 1]].ravel()
-    keep = (u >= 0) & (v >= 0) & (u != v)
-    u, v = np.minimum(u[keep], v[keep]), np.maximum(u[keep], v[keep])
-    pair_keys = np.unique(u * len(points) + v)  # each arc once, though two triangles share it
-    u, v = pair_keys // len(points), pair_keys % len(points)
-    # Number the nodes in use 0..N-1 (the start last) so the graph stays small.
-    ids, local = np.unique(np.concatenate([u, v, [source]]), return_inverse=True)
-    weights = np.linalg.norm(points[u] - points[v], axis=1) + 1e-12
-    graph = csr_matrix((weights, (local[:len(u)], local[len(u):-1])), shape=(len(ids), len(ids)))
-
-    n_paths, n_waypoints = surface.paths.shape[:2]
-    goal_row = np.zeros(len(points), dtype=bool)
-    top = np.arange(n_paths) * n_waypoints + n_waypoints - 1
-    goal_row[point_of[top[on_level[top]]]] = True
-    strips = np.flatnonzero(~surface.cuts)
-    top_rungs = surface.rung_edge(strips, n_waypoints - 1)
-    goal_row[n_points_ + segment_of[top_rungs]] = True  # strict crossings on the goal row's chords
-    return points[ids], graph, np.flatnonzero(goal_row[ids])
+    # Dijkstra from the start.
+    origin = len(ids) - 1
+    distance = np.full(len(ids), np.inf)
+    previous = np.full(len(ids), -1, dtype=np.int64)
+    distance[origin] = 0.0
+    queue = [(0.0, origin)]
+    while len(queue):
+        reached, node = heapq.heappop(queue)
+        if reached > distance[node]:
+            continue
+        for e in range(first[node], first[node + 1]):
+            other = neighbours[e]
+            candidate = reached + np.sqrt(np.sum((points[other] - points[node]) ** 2)) + 1e-12
+            if candidate < distance[other]:
+                distance[other] = candidate
+                previous[other] = node
+                heapq.heappush(queue, (candidate, other))
+    best = -1
+    for node in range(len(ids)):
+        if goal[ids[node]] and distance[node] < np.inf and \
+                (best < 0 or distance[node] < distance[best]):
+            best = node
+    if best < 0:
+        return np.empty((0, n))
+    length = 1
+    node = best
+    while node != origin:
+        node = previous[node]
+        length += 1
+    route = np.empty((length, n))
+    node = best
+    for k in range(length - 1, -1, -1):
+        route[k] = points[node]
+        node = previous[node]
+    return route

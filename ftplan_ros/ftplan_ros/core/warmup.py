@@ -12,7 +12,9 @@ import numpy as np
 from .collision import CollisionChecker
 from .curves import FrozenJoints
 from .failure_planes import crossing_segments
+from .failure_surface import FailureSurface
 from .manifolds import ManifoldOptions, trace_self_motion_manifolds
+from .recovery import recover
 from .robot import PlanarChain, Robot, task_errors, task_residuals
 from .scene import Obstacle
 from .verification import certify_simplices
@@ -20,7 +22,10 @@ from .web_search import load_sheet_kernels
 
 
 def load_kernels(robot: Robot) -> None:
-    """Run every compiled kernel the robot's plans use once: tracing, task maps, distances."""
+    """Run every compiled kernel the robot's plans use once: tracing, task maps, distances.
+
+    Recovery and, for a planar 3R arm, the recovery sheets' kernels too.
+    """
     theta = np.clip(np.full(robot.n_joints, 0.5), robot.limits[:, 0], robot.limits[:, 1])
     x = robot.forward_kinematics(theta)
     task_residuals(robot, x, theta)
@@ -39,5 +44,7 @@ def load_kernels(robot: Robot) -> None:
         checker.clearance(np.stack([theta, theta]), needed=np.inf)
         certify_simplices(checker, corners, 0.0, 1)
     crossing_segments(np.array([0.0, 1.0]), np.array([0.5]), periodic=True)
+    fan = np.stack([np.stack([theta, theta + 0.1]), np.stack([theta, theta + 0.2])])
+    recover(FailureSurface(fan, 0, (), ()), theta + 0.05, 0)
     if isinstance(robot, PlanarChain) and robot.n_joints == 3:
         load_sheet_kernels()  # the recovery sheets' grid, searches and slices
