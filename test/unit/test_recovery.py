@@ -93,8 +93,13 @@ def test_the_hit_path_keeps_its_joint_fixed(plans):
 def test_bad_locks_are_rejected(plans):
     _, result = plans['free']
     theta = result.nominal_path[3]
-    with pytest.raises(InputError, match='joint: must be in 0..2'):
-        recover(result.surface, theta, 3)
+    for joint in (3, -1, 1.0, True, np.bool_(False)):
+        with pytest.raises(InputError, match='joint: must be in 0..2'):
+            recover(result.surface, theta, joint)
+    assert recover(result.surface, theta, np.int64(1)) is not None
+    for offset in (np.inf, np.nan, -1e-6):
+        with pytest.raises(InputError, match='max_offset: must be a finite distance'):
+            recover(result.surface, theta, 0, max_offset=offset)
     with pytest.raises(InputError, match='theta: must be 3 finite angles'):
         recover(result.surface, np.array([np.nan, 0.0, 0.0]), 0)
     with pytest.raises(InputError, match='not on the nominal path'):

@@ -94,12 +94,6 @@ class FailureSurface:
         n_paths, n_points = self.paths.shape[:2]
         return n_paths * (n_points - 1) + (n_paths - 1) * n_points + k * (n_points - 1) + w
 
-    @cached_property
-    def triangle_ranges(self) -> tuple[np.ndarray, np.ndarray]:
-        """(T, n) smallest and largest value [rad] of each joint over each triangle's corners."""
-        a, b, c = (self.vertices[self.triangles[:, k]] for k in range(3))
-        return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-
     def triangles_beside_path_edge(self, k: int, w: int) -> list[int]:
         """List the (one or two) triangles that have path k's edge (w, w+1) as a side."""
         n_paths, n_points = self.paths.shape[:2]

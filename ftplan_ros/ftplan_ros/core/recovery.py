@@ -16,6 +16,7 @@ curve leaving the lock point between them can only end on the goal row.
 from __future__ import annotations
 
 import heapq
+import math
 from dataclasses import dataclass
 
 import numba
@@ -87,12 +88,16 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     """Recovery path from θ (n,) [rad] on the nominal path with joint `joint` locked there.
 
     Returns None when the slice of S_F does not connect θ to M_g^F (a verified plan never
-    does that). Raises InputError for a joint index out of range or θ off the path.
+    does that). Raises InputError for a joint that is not an index in range, θ off the
+    path by more than `max_offset` [rad] (finite, >= 0) or a web point that is not finite.
     """
     theta = np.asarray(theta, dtype=float)
     n_joints = surface.paths.shape[-1]
-    if not 0 <= joint < n_joints:
-        raise InputError('joint', f'must be in 0..{n_joints - 1}, got {joint}')
+    if isinstance(joint, bool | np.bool_) or not isinstance(joint, int | np.integer) or \
+            not 0 <= joint < n_joints:
+        raise InputError('joint', f'must be in 0..{n_joints - 1}, got {joint!r}')
+    if not (math.isfinite(max_offset) and max_offset >= 0.0):
+        raise InputError('max_offset', f'must be a finite distance >= 0 [rad], got {max_offset}')
     if theta.shape != (n_joints,) or not np.all(np.isfinite(theta)):
         raise InputError('theta', f'must be {n_joints} finite angles')
     if not np.all(np.isfinite(surface.paths)):
