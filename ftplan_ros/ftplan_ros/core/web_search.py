@@ -857,30 +857,22 @@ def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
             index[d] = rest % shape[d]
             rest //= shape[d]
             interior = interior and 0 < index[d] < shape[d] - 1
-        if interior:  # no neighbour across a face of the grid: flat steps suffice
-            for o in range(offsets.shape[0]):
-                flat = cell + jumps[o]
-                if mask[flat] and parent[flat] == -2:
-                    parent[flat] = cell
-                    queue[tail] = flat
-                    tail += 1
-                    if target[flat]:
-                        end = flat
-                        break
-            continue
         for o in range(offsets.shape[0]):
-            flat = 0
-            inside = True
-            for d in range(dims):
-                value = index[d] + offsets[o, d]
-                if value < 0 or value >= shape[d]:
-                    if periodic[d]:
+            if interior:  # no neighbour across a face of the grid: a flat step suffices
+                flat = cell + jumps[o]
+            else:
+                flat = 0
+                for d in range(dims):
+                    value = index[d] + offsets[o, d]
+                    if value < 0 or value >= shape[d]:
+                        if not periodic[d]:
+                            flat = -1
+                            break
                         value %= shape[d]
-                    else:
-                        inside = False
-                        break
-                flat = flat * shape[d] + value
-            if inside and mask[flat] and parent[flat] == -2:
+                    flat = flat * shape[d] + value
+                if flat < 0:
+                    continue
+            if mask[flat] and parent[flat] == -2:
                 parent[flat] = cell
                 queue[tail] = flat
                 tail += 1
