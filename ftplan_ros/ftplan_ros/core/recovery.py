@@ -109,7 +109,8 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     n_points = int(point_of.max()) + 1
     source = n_points + int(segment_of.max()) + 1  # the start's node id, above all others
     n_paths, n_waypoints = surface.paths.shape[:2]
-    values = np.ascontiguousarray(surface.vertices[:, joint])
+    vertices = np.ascontiguousarray(surface.vertices, dtype=float)  # one compiled signature
+    values = np.ascontiguousarray(vertices[:, joint])
     top = np.arange(n_paths) * n_waypoints + n_waypoints - 1
     top_rungs = surface.rung_edge(np.flatnonzero(~surface.cuts), n_waypoints - 1)
     goal = np.zeros(source + 1, dtype=np.bool_)
@@ -118,7 +119,7 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     beside_start = np.array([t for t in surface.triangles_beside_path_edge(surface.nominal,
                                                                            segment)
                              if surface.live_triangles[t]], dtype=np.int64)
-    route = _slice_route(values, np.ascontiguousarray(surface.vertices), surface.triangles,
+    route = _slice_route(values, vertices, surface.triangles,
                          surface.triangle_edges, surface.edges, point_of, segment_of,
                          surface.live_triangles, beside_start, level, joint, start, n_points,
                          source, goal)
