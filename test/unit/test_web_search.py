@@ -129,9 +129,11 @@ def test_recovery_paths_are_shortest_in_the_slice_of_the_web(sheets_plan):
     """`recover` on a sheets web, whose slices branch where sheets share points.
 
     No recovery is shorter than the referee's shortest path, and 90 % or more are as short.
-    (Some locks at nominal waypoints recover by a path that first steps out along a
-    column and back, 0.035 rad each way on seed 1: a detour of the slice graph that the
-    scipy version of `recover` took too. The path stays in S_F, so it is still a recovery.)
+    (Some locks within rounding of a nominal waypoint, but not on it, recover by a path
+    that first steps out along a column and back, 0.035 rad each way on seed 1: sliced a
+    hair beside the waypoint, S_F's column there is skirted round, not crossed, while the
+    referee joins θ to every triangle within 1e-9 of it. The scipy version of `recover`
+    took the same detours. The path stays in S_F, so it is still a recovery.)
     """
     seed, scene, result = sheets_plan
     rng = np.random.default_rng(seed)
