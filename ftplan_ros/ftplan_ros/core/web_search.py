@@ -670,19 +670,21 @@ def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.
 
 @numba.njit(cache=True)
 def _triangle_free(mask, a, b, c, periodic):
-    """Whether every cell the triangle a, b, c (in cell units) meets is in mask.
+    """Whether every cell the triangle a, b, c (in cell units) meets is in the 2-D mask.
 
-    Its edges are walked exactly (`_segment_free`) and its inside on lines a quarter
-    cell apart, each walked exactly too.
+    Its edges are walked exactly (`_cut_free`) and its inside on lines a quarter cell
+    apart, each walked exactly too.
     """
-    if not (_segment_free(mask, a, b, periodic) and _segment_free(mask, b, c, periodic)
-            and _segment_free(mask, c, a, periodic)):
+    flat = mask.ravel()
+    shape = np.array(mask.shape)
+    if not (_cut_free(flat, shape, periodic, a, b) and _cut_free(flat, shape, periodic, b, c)
+            and _cut_free(flat, shape, periodic, c, a)):
         return False
     steps = int(np.ceil(max(max(abs(b[0] - a[0]), abs(b[1] - a[1])),
                             max(abs(c[0] - a[0]), abs(c[1] - a[1]))) * 4.0))
     for s in range(1, steps):
         u = s / steps
-        if not _segment_free(mask, a + u * (b - a), a + u * (c - a), periodic):
+        if not _cut_free(flat, shape, periodic, a + u * (b - a), a + u * (c - a)):
             return False
     return True
 
@@ -787,26 +789,6 @@ def _cut_free(mask, shape, periodic, a, b):
     return True
 
 
-@numba.njit(cache=True)
-def _segment_free(mask, a, b, periodic):
-    """Whether every cell the segment a-b (in cell units) passes through is in mask."""
-    size = mask.shape[0]
-    cells = _segment_walk(a, b)
-    for k in range(cells.shape[0]):
-        i, j = cells[k, 0], cells[k, 1]
-        if periodic[0]:
-            i %= size
-        elif i < 0 or i >= size:
-            return False
-        if periodic[1]:
-            j %= size
-        elif j < 0 or j >= size:
-            return False
-        if not mask[i, j]:
-            return False
-    return True
-
-
 def _bfs(mask: np.ndarray, periodic: np.ndarray, sources: np.ndarray, target: np.ndarray,
          ) -> np.ndarray | None:
     """Cells (c, d) of a shortest path in mask (d = 2 or 3) from a source to a target cell."""
@@ -906,7 +888,6 @@ def load_sheet_kernels() -> None:
     mask = grid.classes.certified
     _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
-    _segment_free(mask[0], np.zeros(2), np.ones(2), grid.lattice.periodic[1:])
     _segment_walk(np.zeros(2), np.ones(2))
     _greedy_cuts(mask, grid.lattice.periodic, np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]), 16)
     _greedy_cuts(mask[0], grid.lattice.periodic[1:], np.array([[0.0, 0], [1, 1], [2, 2]]), 16)
