@@ -46,6 +46,17 @@ class FailureSurface:
         return self.paths[:, -1]
 
     @property
+    def goal_vertices(self) -> np.ndarray:
+        """(K,) indices into `vertices` of the goal points (each path's last waypoint)."""
+        n_paths, n_points = self.paths.shape[:2]
+        return np.arange(n_paths) * n_points + n_points - 1
+
+    @property
+    def goal_chords(self) -> np.ndarray:
+        """Indices into `edges` of the goal row's chords: the top rungs of S_F's strips."""
+        return self.rung_edge(np.flatnonzero(~self.cuts), self.paths.shape[1] - 1)
+
+    @property
     def nominal_path(self) -> np.ndarray:
         """The nominal joint path (W+1, n) [rad] from θ_s to a goal configuration."""
         return self.paths[self.nominal]

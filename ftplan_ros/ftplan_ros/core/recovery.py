@@ -104,25 +104,23 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
         raise InputError('surface', 'has a point that is not finite')
     segment, start = locate_on_nominal_path(surface, theta, joint, max_offset)
     # S_F is sliced at the locked value moved into the path's range (by at most max_offset).
-    level = float(start[joint])
+    slice_level = float(start[joint])
     point_of, segment_of = surface.vertex_ids, surface.edge_ids
     n_points = int(point_of.max()) + 1
     source = n_points + int(segment_of.max()) + 1  # the start's node id, above all others
-    n_paths, n_waypoints = surface.paths.shape[:2]
     vertices = np.ascontiguousarray(surface.vertices, dtype=float)  # one compiled signature
     values = np.ascontiguousarray(vertices[:, joint])
-    top = np.arange(n_paths) * n_waypoints + n_waypoints - 1
-    top_rungs = surface.rung_edge(np.flatnonzero(~surface.cuts), n_waypoints - 1)
+    top = surface.goal_vertices
     goal = np.zeros(source + 1, dtype=np.bool_)
-    goal[point_of[top[values[top] == level]]] = True
-    goal[n_points + segment_of[top_rungs]] = True  # strict crossings on the goal row's chords
+    goal[point_of[top[values[top] == slice_level]]] = True
+    goal[n_points + segment_of[surface.goal_chords]] = True  # strict crossings of the chords
     beside_start = np.array([t for t in surface.triangles_beside_path_edge(surface.nominal,
                                                                            segment)
                              if surface.live_triangles[t]], dtype=np.int64)
     route = _slice_route(values, vertices, surface.triangles,
                          surface.triangle_edges, surface.edges, point_of, segment_of,
-                         surface.live_triangles, beside_start, level, joint, start, n_points,
-                         source, goal)
+                         surface.live_triangles, beside_start, slice_level, joint, start,
+                         n_points, source, goal)
     if len(route) == 0:
         return None
     path = np.vstack([theta[None, :], route])

@@ -61,12 +61,11 @@ def _web_tables(surface: FailureSurface) -> tuple:
     corners, sides = corners[first], sides[first]
     segment_ends = np.zeros((int(segment_of.max()) + 1, 2), dtype=np.int64)
     segment_ends[segment_of] = point_of[surface.edges]
-    n_paths, n_waypoints = surface.paths.shape[:2]
+    n_waypoints = surface.paths.shape[1]
     goal_point = np.zeros(n_points, dtype=np.bool_)
-    goal_point[point_of[np.arange(n_paths) * n_waypoints + n_waypoints - 1]] = True
+    goal_point[point_of[surface.goal_vertices]] = True
     goal_segment = np.zeros(len(segment_ends), dtype=np.bool_)
-    goal_segment[segment_of[surface.rung_edge(np.flatnonzero(~surface.cuts),
-                                              n_waypoints - 1)]] = True
+    goal_segment[segment_of[surface.goal_chords]] = True
     nominal = surface.nominal * n_waypoints + np.arange(n_waypoints)
     nominal_points = point_of[nominal]
     nominal_segments = segment_of[surface.path_edge(surface.nominal, np.arange(n_waypoints - 1))]
