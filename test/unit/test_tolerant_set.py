@@ -398,6 +398,32 @@ def test_label_components_finds_the_components_round_the_torus():
         layer_components(np.ones((4, 4, 4), bool), 3, np.zeros(3, bool))
 
 
+def test_label_components_reads_whole_words_of_cells_as_cell_by_cell():
+    """Grids of 8 and 16 cells per axis, read eight cells at a time, against the explicit graph.
+
+    The masks are blocky (4-cell blocks, a few cells flipped), so lines and rows hold
+    whole words of eight cells in and out of the mask as well as words that change.
+    """
+    rng = np.random.default_rng(14)
+    for trial in range(40):
+        shape = tuple(int(v) for v in rng.choice([8, 16], 3))
+        blocks = rng.random(tuple(v // 4 for v in shape)) < rng.uniform(0.3, 0.7)
+        mask = np.kron(blocks, np.ones((4, 4, 4), bool)).astype(bool)
+        mask ^= rng.random(shape) < 0.03
+        periodic = rng.random(3) < 0.5
+        for joint in (None, 0, 1, 2):
+            if joint is None:
+                labels, structure = components(mask, periodic).labels(), np.ones((3, 3, 3), bool)
+            else:
+                labels = layer_components(mask, joint, periodic).labels()
+                structure = np.zeros((3, 3, 3), bool)
+                structure[(slice(None),) * joint + (1,)] = True
+            assert np.all((labels > 0) == mask)
+            a, b = labels[mask], union_find_labels(mask, structure, periodic)[mask]
+            assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]), \
+                (trial, joint)
+
+
 # G from both sides ----------------------------------------------------------------------
 
 @pytest.fixture(scope='module')

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+_EIGHT_INSIDE = np.uint64(0x0101010101010101)  # eight cells of a bool mask, all True
+
 
 @dataclass(frozen=True, eq=False)
 class Components:
@@ -103,8 +105,10 @@ def components(mask: np.ndarray, periodic: np.ndarray,
     along = across[-1]
     lines = [axis for axis in range(3) if axis != along]
     axes = np.array(lines + [along], dtype=np.int64)
+    flat = mask.ravel()
+    words = flat.view(np.uint64) if flat.size % 8 == 0 else np.zeros(0, dtype=np.uint64)
     first, starts, ends, number, count = _runs(
-        mask.ravel(), np.array(mask.shape, dtype=np.int64), axes,
+        flat, words, np.array(mask.shape, dtype=np.int64), axes,
         np.array([axis in across for axis in lines]),
         np.array([axis in across and bool(periodic[axis]) for axis in lines + [along]]))
     return Components(tuple(int(v) for v in mask.shape), axes, first, starts, ends, number,
@@ -194,8 +198,11 @@ def _join(parent, a, b):
 
 
 @numba.njit(cache=True)
-def _runs(mask, shape, axes, joined, wrap):
+def _runs(mask, words, shape, axes, joined, wrap):
     """Find the runs of `mask` (flat, C order) and their components (see `Components`).
+
+    `words` holds the mask's bytes eight at a time (uint64), to skip cells by the eight;
+    it is empty when the mask's size is not a multiple of 8.
 
     The cells lie on lines along the last of `axes` (3,), one line per index pair along
     the first two; each line's cells in the mask form runs. A run is one node of a
@@ -214,10 +221,11 @@ def _runs(mask, shape, axes, joined, wrap):
     starts = np.empty(lines * ((size_r + 1) // 2), dtype=np.int32)
     ends = np.empty_like(starts)
     if step_q == 1 and step_r != 1:
-        count = _plane_runs(mask, size_p, size_q, size_r, step_p, step_r, first, starts, ends)
+        count = _plane_runs(mask, words, size_p, size_q, size_r, step_p, step_r, first, starts,
+                            ends)
     else:
-        count = _line_runs(mask, size_p, size_q, size_r, step_p, step_q, step_r, first, starts,
-                           ends)
+        count = _line_runs(mask, words, size_p, size_q, size_r, step_p, step_q, step_r, first,
+                           starts, ends)
     first[lines] = count
     parent = np.arange(count, dtype=np.int32)
     # Each pair of neighbouring lines once: the neighbours one step back (as C order).
@@ -254,12 +262,23 @@ def _runs(mask, shape, axes, joined, wrap):
 
 
 @numba.njit(cache=True)
-def _line_runs(mask, size_p, size_q, size_r, step_p, step_q, step_r, first, starts, ends):
+def _line_runs(mask, words, size_p, size_q, size_r, step_p, step_q, step_r, first, starts,
+               ends):
     """Find `_runs`'s runs line by line; fill first[:-1], starts and ends, return their number."""
     count = 0
     for line in range(size_p * size_q):
         first[line] = count
         base = (line // size_q) * step_p + (line % size_q) * step_q
+        if step_r == 1:  # the line's cells lie side by side: words of them are skipped at once
+            stop = base + size_r
+            r = _next_change(mask, words, base, stop, False)
+            while r < stop:
+                end = _next_change(mask, words, r + 1, stop, True)
+                starts[count] = r - base
+                ends[count] = end - 1 - base
+                count += 1
+                r = _next_change(mask, words, end, stop, False)
+            continue
         r = 0
         while r < size_r:
             if mask[base + r * step_r]:
@@ -273,39 +292,74 @@ def _line_runs(mask, size_p, size_q, size_r, step_p, step_q, step_r, first, star
 
 
 @numba.njit(cache=True)
-def _plane_runs(mask, size_p, size_q, size_r, step_p, step_r, first, starts, ends):
+def _plane_runs(mask, words, size_p, size_q, size_r, step_p, step_r, first, starts, ends):
     """Find `_runs`'s runs where lines are strided but neighbouring lines lie side by side.
 
     Each plane of lines is read row by row (step_q = 1, in memory order), with the run
-    open on each line carried along; runs land in a slot of (size_r + 1) // 2 per line
-    and are then packed in line order. Fills first[:-1], starts and ends; returns the
-    number of runs.
+    open on each line carried along; a plane's runs land in a slot of (size_r + 1) // 2
+    per line and are packed in line order once the plane is read (the plane's lines come
+    one after another in line order). Where rows start on whole words, eight cells that
+    equal the row before open and close no run and are passed over at once. Fills
+    first[:-1], starts and ends; returns the number of runs.
     """
     slots = (size_r + 1) // 2
-    held = np.zeros(size_p * size_q, dtype=np.int64)
+    held = np.zeros(size_q, dtype=np.int64)
     opened = np.empty(size_q, dtype=np.int64)
+    plane_starts = np.empty(size_q * slots, dtype=np.int32)
+    plane_ends = np.empty_like(plane_starts)
+    by_words = words.shape[0] > 0 and size_q % 8 == 0 and step_p % 8 == 0 and step_r % 8 == 0
+    nothing = np.uint64(0)
+    count = 0
     for p in range(size_p):
         opened[:] = -1
+        held[:] = 0
         for r in range(size_r + 1):
             row = p * step_p + r * step_r
-            for q in range(size_q):
-                inside = r < size_r and mask[row + q]
-                if inside and opened[q] < 0:
-                    opened[q] = r
-                elif not inside and opened[q] >= 0:
-                    line = p * size_q + q
-                    starts[line * slots + held[line]] = opened[q]
-                    ends[line * slots + held[line]] = r - 1
-                    held[line] += 1
-                    opened[q] = -1
-    count = 0
-    for line in range(size_p * size_q):  # packing moves runs down only: never overwrites
-        first[line] = count
-        for k in range(held[line]):
-            starts[count] = starts[line * slots + k]
-            ends[count] = ends[line * slots + k]
-            count += 1
+            for q0 in range(0, size_q, 8):
+                if by_words:
+                    now = words[(row + q0) // 8] if r < size_r else nothing
+                    before = words[(row - step_r + q0) // 8] if r > 0 else nothing
+                    if now == before:
+                        continue
+                for q in range(q0, min(q0 + 8, size_q)):
+                    inside = r < size_r and mask[row + q]
+                    if inside and opened[q] < 0:
+                        opened[q] = r
+                    elif not inside and opened[q] >= 0:
+                        plane_starts[q * slots + held[q]] = opened[q]
+                        plane_ends[q * slots + held[q]] = r - 1
+                        held[q] += 1
+                        opened[q] = -1
+        for q in range(size_q):
+            first[p * size_q + q] = count
+            for k in range(held[q]):
+                starts[count] = plane_starts[q * slots + k]
+                ends[count] = plane_ends[q * slots + k]
+                count += 1
     return count
+
+
+@numba.njit(cache=True)
+def _next_change(mask, words, start, stop, value):
+    """Return the first flat index in start..stop-1 whose cell is not `value`, else stop.
+
+    Whole words of eight cells that are all `value` are passed over at once (`words`, as
+    `_runs` takes them; cell by cell when it is empty).
+    """
+    i = start
+    if words.shape[0]:
+        pattern = _EIGHT_INSIDE if value else np.uint64(0)
+        while i < stop and i % 8:
+            if mask[i] != value:
+                return i
+            i += 1
+        while i + 8 <= stop and words[i // 8] == pattern:
+            i += 8
+    while i < stop:
+        if mask[i] != value:
+            return i
+        i += 1
+    return stop
 
 
 @numba.njit(cache=True)
