@@ -37,6 +37,7 @@ triangle's clearance and the slices themselves are then checked like any web
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -333,12 +334,18 @@ class _SheetBuilder:
         self.layers = np.moveaxis(grid.classes.certified, joint, 0)  # layer first
         goals = grid.goal_points[joint]
         self.goal_points = goals
-        self.goal_slabs = grid.goal_slabs[joint]
-        self.goal_cells = self.lattice.cell_of(goals)[:, self.others]
+        # The goal samples by sub-slab: those of slab s are by_slab[first[s]:first[s + 1]],
+        # in the order of goal_points.
+        slabs = grid.goal_slabs[joint]
+        self.by_slab = np.argsort(slabs, kind='stable')
         self.m = grid.sub_slabs[joint]
+        self.slab_first = np.searchsorted(slabs[self.by_slab], np.arange(self.size * self.m + 1))
+        self.goal_cells = self.lattice.cell_of(goals)[:, self.others]
+        self.offsets2 = (gamma[:, self.others] - self.lower2) / self.step2  # [cell units]
         self.free = _TriangleCheck(grid.scene, margin)
+        self.strip_layers = _strip_layers(gamma[:, joint], self.lattice.lower[joint],
+                                          self.lattice.step[joint])
         self.splits: dict[int, float] = {}
-        self.masks: dict[tuple[int, int], np.ndarray] = {}
         self.memo = {} if memo is None else memo
 
     def build(self) -> list[list[np.ndarray]] | None:
@@ -374,29 +381,25 @@ class _SheetBuilder:
 
     def _strip_mask(self, j: int) -> np.ndarray:
         """(N, N) the cells certified free in every θ_i-layer the strip (j, j+1) spans."""
-        lattice = self.lattice
-        low, high = sorted(self._levels(j))
-        # Closed layers: a strip from a layer boundary on does not span the layer below.
-        nudge = 1e-9 * (high - low)
-        first = int(np.floor((low + nudge - lattice.lower[self.joint]) / lattice.step[self.joint]))
-        last = int(np.floor((high - nudge - lattice.lower[self.joint]) / lattice.step[self.joint]))
-        key = (first, last)
-        if key not in self.masks:
+        first, last = (int(v) for v in self.strip_layers[j])
+        key = ('mask', self.joint, first, last)  # the same for the builders of every round
+        if key not in self.memo:
             layers = np.arange(first, last + 1)
-            layers = np.mod(layers, self.size) if lattice.periodic[self.joint] else \
+            layers = np.mod(layers, self.size) if self.lattice.periodic[self.joint] else \
                 np.clip(layers, 0, self.size - 1)
-            self.masks[key] = np.logical_and.reduce(self.layers[layers], axis=0)
-        return self.masks[key]
+            self.memo[key] = np.logical_and.reduce(self.layers[layers], axis=0)
+        return self.memo[key]
 
-    def _cell2(self, point2: np.ndarray) -> np.ndarray:
-        offset = np.floor((point2 - self.lower2) / self.step2).astype(np.int64)
-        return _wrap_cells(offset, self.periodic2, self.size)
+    def _cell2(self, point2: np.ndarray) -> tuple[int, int]:
+        """Return the 2-D cell holding a point (2,) [rad] of the layer."""
+        offset = (point2 - self.lower2) / self.step2
+        return tuple(_wrap_index(math.floor(offset[a]), self.periodic2[a], self.size)
+                     for a in range(2))
 
     def _fan_free(self, mask: np.ndarray, j: int, hub: np.ndarray) -> bool:
         """Whether the triangle (P_j, P_{j+1}, hub) lies in the mask's cells."""
-        a, b = self.gamma[j, self.others], self.gamma[j + 1, self.others]
-        offsets = [(p - self.lower2) / self.step2 for p in (a, b, hub)]
-        return _triangle_free(mask, offsets[0], offsets[1], offsets[2], self.periodic2)
+        return _triangle_free(mask, self.offsets2[j], self.offsets2[j + 1],
+                              (hub - self.lower2) / self.step2, self.periodic2)
 
     def _fresh(self, j: int) -> dict | None:
         """Start a new sheet of the strip (j, j+1), or ask for a split (`_new_sheet`)."""
@@ -417,9 +420,9 @@ class _SheetBuilder:
         hub = None
         for point in (0.5 * (ends[0] + ends[1]), ends[1], ends[0]):
             cell = self._cell2(point)
-            centre = point + _step(self.lower2 + (cell + 0.5) * self.step2 - point,
+            centre = point + _step(self.lower2 + (np.array(cell) + 0.5) * self.step2 - point,
                                    self.periodic2)
-            if mask[tuple(cell)] and self._fan_free(mask, j, centre):
+            if mask[cell] and self._fan_free(mask, j, centre):
                 hub = (cell, centre)
                 break
         later = self._goal_candidates(levels[1], levels[0])
@@ -429,7 +432,7 @@ class _SheetBuilder:
         target = np.zeros(mask.shape, dtype=np.bool_)
         cells = self.goal_cells[later]
         target[tuple(cells[mask[tuple(cells.T)]].T)] = True
-        path = _bfs(mask, self.periodic2, hub[0][None, :], target)
+        path = _bfs(mask, self.periodic2, np.array([hub[0]]), target)
         if path is None:
             return self._split(j, layers=True)
         route, covered = self._lift_route(path, hub[1], mask)
@@ -484,8 +487,8 @@ class _SheetBuilder:
         mask = self._strip_mask(j)
         if not self._fan_free(mask, j, block['route'][0]):
             return None
-        route_cells = _wrap_cells(block['route_cells'], self.periodic2, self.size)
-        if not mask[tuple(route_cells.T)].all():
+        route_cells = block['route_cells']
+        if not mask[route_cells[:, 0], route_cells[:, 1]].all():
             return None
         v = self.gamma[j, self.joint]
         end, following = block['route'][-1], block['goals'][0]
@@ -531,13 +534,14 @@ class _SheetBuilder:
         stays within the goal tolerance.
         """
         lattice = self.lattice
-        nudged = level + 1e-9 * np.sign(toward - level) * lattice.step[self.joint]
+        side = int(toward > level) - int(toward < level)
+        nudged = level + 1e-9 * side * lattice.step[self.joint]
         offset = (nudged - lattice.lower[self.joint]) / lattice.step[self.joint]
-        layer = int(np.floor(offset))
-        k = int(np.clip(np.floor((offset - layer) * self.m), 0, self.m - 1))
-        layer = layer % self.size if lattice.periodic[self.joint] else \
-            int(np.clip(layer, 0, self.size - 1))
-        return np.flatnonzero(self.goal_slabs == layer * self.m + k)
+        layer = math.floor(offset)
+        k = min(max(math.floor((offset - layer) * self.m), 0), self.m - 1)
+        layer = _wrap_index(layer, lattice.periodic[self.joint], self.size)
+        slab = layer * self.m + k
+        return self.by_slab[self.slab_first[slab]:self.slab_first[slab + 1]]
 
     def _goal(self, index: int, level: float, near2: np.ndarray) -> np.ndarray:
         """Goal sample `index` at the locked value `level`, lifted next to `near2` (2,)."""
@@ -560,15 +564,26 @@ class _SheetBuilder:
 
     def _columns(self, block: dict) -> list[np.ndarray]:
         """Return the columns (L, 3) of a block: γ(j), the hub and route at level v_j, the goal."""
-        columns = []
-        for j in range(block['j0'], block['j1'] + 1):
-            level = self.gamma[j, self.joint]
-            tail = np.zeros((len(block['route']), 3))
-            tail[:, self.others] = block['route']
-            tail[:, self.joint] = level
-            columns.append(np.vstack([self.gamma[j][None, :], tail,
-                                      block['goals'][j - block['j0']][None, :]]))
-        return columns
+        rows = self.gamma[block['j0']:block['j1'] + 1]
+        columns = np.empty((len(rows), len(block['route']) + 2, 3))
+        columns[:, 0] = rows
+        for k, axis in enumerate(self.others):
+            columns[:, 1:-1, axis] = block['route'][:, k]
+        columns[:, 1:-1, self.joint] = rows[:, self.joint, None]
+        columns[:, -1] = block['goals']
+        return list(columns)
+
+
+def _strip_layers(levels: np.ndarray, lower: float, step: float) -> np.ndarray:
+    """Return the first and last θ_i-layer (W, 2) of each strip between levels (W+1,) [rad].
+
+    Layers are closed: a strip from a layer boundary on does not span the layer below.
+    Indices are not wrapped.
+    """
+    low, high = np.minimum(levels[:-1], levels[1:]), np.maximum(levels[:-1], levels[1:])
+    nudge = 1e-9 * (high - low)
+    return np.stack([np.floor((low + nudge - lower) / step),
+                     np.floor((high - nudge - lower) / step)], axis=1).astype(np.int64)
 
 
 # [rad] largest step between the goals of neighbouring columns (the goal row's chords)
@@ -622,35 +637,9 @@ def _wrapped(surface: FailureSurface, periodic: np.ndarray) -> FailureSurface:
 
 # Grid helpers ---------------------------------------------------------------------------
 
-def _wrap_cells(cells: np.ndarray, periodic: np.ndarray, size: int) -> np.ndarray:
-    return np.where(periodic, np.mod(cells, size), np.clip(cells, 0, size - 1))
-
-
-def _common_neighbours(a: np.ndarray, b: np.ndarray, mask: np.ndarray, periodic: np.ndarray,
-                       ) -> list[np.ndarray]:
-    """Cells of `mask` within one step (8 neighbours or itself) of both cells a and b."""
-    size = mask.shape[0]
-    out = []
-    for da in (-1, 0, 1):
-        for db in (-1, 0, 1):
-            y = _wrap_cells(a + np.array([da, db]), periodic, size)
-            if _near(y, b, periodic, size) and mask[tuple(y)]:
-                out.append(y)
-    return out
-
-
-def _near(a: np.ndarray, b: np.ndarray, periodic: np.ndarray, size: int) -> bool:
-    """Whether 2-D cells a and b are equal or neighbours (round the torus)."""
-    gap = np.abs(np.asarray(a) - np.asarray(b))
-    gap = np.where(periodic, np.minimum(gap, size - gap), gap)
-    return bool(gap.max() <= 1)
-
-
-def _box(a: np.ndarray, b: np.ndarray, periodic: np.ndarray, size: int) -> np.ndarray:
-    """Return the (up to 2 x 2) cells between neighbouring cells a and b (round the torus)."""
-    step = np.asarray(b) - np.asarray(a)
-    step = np.where(periodic & (np.abs(step) > 1), -np.sign(step), step)
-    return np.array([a, a + [step[0], 0], a + [0, step[1]], a + step], dtype=np.int64)
+def _wrap_index(index: int, periodic: bool, size: int) -> int:
+    """Return a cell index on an axis of `size` cells: wrapped if periodic, else clipped."""
+    return index % size if periodic else min(max(index, 0), size - 1)
 
 
 def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.ndarray,
@@ -662,10 +651,7 @@ def _shortcut(points: np.ndarray, mask: np.ndarray, lower: np.ndarray, step: np.
     """
     offsets = (points - lower) / step
     kept = _greedy_cuts(mask, periodic, offsets, _LONGEST_CUT)
-    covered = [_segment_walk(offsets[a], offsets[b]) for a, b in zip(kept[:-1], kept[1:],
-                                                                      strict=True)]
-    covered.append(_segment_walk(offsets[-1], offsets[-1]))
-    return points[kept], _wrap_cells(np.vstack(covered), periodic, mask.shape[0])
+    return points[kept], _route_cells(offsets[kept], periodic.astype(np.bool_), mask.shape[0])
 
 
 @numba.njit(cache=True)
@@ -727,14 +713,27 @@ def _piece_middles(a, b):
 
 
 @numba.njit(cache=True)
-def _segment_walk(a, b):
-    """Cells (c, 2), unwrapped, that the segment a-b (in cell units) passes through."""
-    middles = _piece_middles(a, b)
-    cells = np.empty((middles.shape[0], 2), dtype=np.int64)
-    for k in range(middles.shape[0]):
-        t = middles[k]
-        cells[k, 0] = int(np.floor(a[0] + t * (b[0] - a[0])))
-        cells[k, 1] = int(np.floor(a[1] + t * (b[1] - a[1])))
+def _route_cells(points, periodic, size):
+    """Cells (c, 2) the route through `points` (r, 2) [cell units] passes, in order.
+
+    Each segment's cells, then the last point's; indices are wrapped round the periodic
+    axes and clipped to the grid along the others.
+    """
+    pieces = [_piece_middles(points[k], points[k + 1]) for k in range(points.shape[0] - 1)]
+    pieces.append(_piece_middles(points[-1], points[-1]))
+    count = 0
+    for middles in pieces:
+        count += middles.shape[0]
+    cells = np.empty((count, 2), dtype=np.int64)
+    row = 0
+    for k, middles in enumerate(pieces):
+        a, b = points[min(k, points.shape[0] - 1)], points[min(k + 1, points.shape[0] - 1)]
+        for t in middles:
+            for axis in range(2):
+                index = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
+                cells[row, axis] = index % size if periodic[axis] else \
+                    min(max(index, 0), size - 1)
+            row += 1
     return cells
 
 
@@ -789,12 +788,16 @@ def _cut_free(mask, shape, periodic, a, b):
     return True
 
 
+# The steps to a cell's neighbours in 2-D and 3-D (at most one cell along each axis), in
+# C order.
+_NEIGHBOUR_STEPS = {dims: np.array([o for o in np.ndindex(*(3,) * dims) if any(v != 1 for v in o)],
+                                   dtype=np.int64) - 1 for dims in (2, 3)}
+
+
 def _bfs(mask: np.ndarray, periodic: np.ndarray, sources: np.ndarray, target: np.ndarray,
          ) -> np.ndarray | None:
     """Cells (c, d) of a shortest path in mask (d = 2 or 3) from a source to a target cell."""
-    dims = mask.ndim
-    offsets = np.array([o for o in np.ndindex(*(3,) * dims) if any(v != 1 for v in o)],
-                       dtype=np.int64) - 1
+    offsets = _NEIGHBOUR_STEPS[mask.ndim]
     flat_sources = np.ravel_multi_index(tuple(np.asarray(sources).T), mask.shape)
     found = _bfs_kernel(np.ascontiguousarray(mask).ravel(), np.array(mask.shape),
                         periodic.astype(np.bool_), offsets, flat_sources.astype(np.int64),
@@ -888,7 +891,7 @@ def load_sheet_kernels() -> None:
     mask = grid.classes.certified
     _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
-    _segment_walk(np.zeros(2), np.ones(2))
+    _route_cells(np.array([[0.0, 0.0], [1.0, 1.0]]), np.ones(2, dtype=np.bool_), 4)
     _greedy_cuts(mask, grid.lattice.periodic, np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]), 16)
     _greedy_cuts(mask[0], grid.lattice.periodic[1:], np.array([[0.0, 0], [1, 1], [2, 2]]), 16)
     _triangle_free(mask[0], np.zeros(2), np.ones(2), np.array([0.0, 1.0]),
