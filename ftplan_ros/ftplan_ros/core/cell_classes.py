@@ -40,6 +40,9 @@ from .scene import Scene
 
 # [rad] every arc gives this much away to the rounding of arcsin and arccos near 1
 _ANGLE_ROUNDING = 1e-6
+# [m] a row of cells is passed over when the tool misses x by this much more than the
+# reach at every angle of the last link: far beyond the rounding of the distances
+_FAR_BEYOND_ROUNDING = 1e-9
 
 
 def supports(scene: Scene) -> bool:
@@ -186,7 +189,8 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
     The wrist then stays where it is at the centre and only θ_3 turns the link, so per
     sphere and (θ_1, θ_2) cell the directions from the wrist within reach + drift
     (`_arc_half_width`), widened by h_3, mark the θ_3 cells that may collide, and those
-    within reach - drift, narrowed by h_3, the ones that surely do.
+    within reach - drift, narrowed by h_3, the ones that surely do. The drift depends on
+    the base and the elbow only, so on the θ_1 cell: it is measured once per θ_1 cell.
     """
     cells = certified.shape[0]
     points = np.zeros((4, 2))
@@ -194,11 +198,20 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
     half = 0.5 * step
     may_hit = np.empty(cells + 1, dtype=np.int64)
     surely_hit = np.empty(cells + 1, dtype=np.int64)
+    spheres = centres.shape[0]
+    may_reach2 = np.empty(spheres)     # [m^2] the disk's radius squared, grown by the drift
+    surely_reach2 = np.empty(spheres)  # [m^2] shrunk by it; NaN when the drift exceeds it
     for i in range(cells):
         theta[0] = lower[0] + (i + 0.5) * step[0]
         first = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 0, points)
         if first == 0:
             continue
+        for p in range(spheres):  # points[0] and points[1], the base and elbow, are set
+            drift = sphere_drift(points, 2, centres[p, 0], centres[p, 1], half) + ROUNDING
+            reach = radii[p] + link_radius
+            off_plane2 = centres[p, 2] * centres[p, 2]
+            may_reach2[p] = (reach + drift) ** 2 - off_plane2
+            surely_reach2[p] = (reach - drift) ** 2 - off_plane2 if reach > drift else np.nan
         for j in range(cells):
             theta[1] = lower[1] + (j + 0.5) * step[1]
             second = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 1,
@@ -208,20 +221,17 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
             base = theta[0] + theta[1] + lower[2]
             may_hit[:] = 0
             surely_hit[:] = 0
-            for p in range(centres.shape[0]):
-                drift = sphere_drift(points, 2, centres[p, 0], centres[p, 1], half) + ROUNDING
+            for p in range(spheres):
                 dx, dy = centres[p, 0] - points[2, 0], centres[p, 1] - points[2, 1]
                 distance = np.sqrt(dx * dx + dy * dy)
-                toward = np.arctan2(dy, dx)
-                reach = radii[p] + link_radius
-                off_plane2 = centres[p, 2] * centres[p, 2]
-                width = _arc_half_width(distance, lengths[2], (reach + drift) ** 2 - off_plane2)
+                width = _arc_half_width(distance, lengths[2], may_reach2[p])
                 if width < 0.0:
                     continue
+                toward = np.arctan2(dy, dx)
                 _mark_cells(may_hit, toward, width + half[2] + _ANGLE_ROUNDING, base, step[2])
-                if reach <= drift:
+                if np.isnan(surely_reach2[p]):
                     continue
-                width = _arc_half_width(distance, lengths[2], (reach - drift) ** 2 - off_plane2)
+                width = _arc_half_width(distance, lengths[2], surely_reach2[p])
                 if width >= np.pi:
                     _mark_cells(surely_hit, toward, np.pi, base, step[2])
                 elif width - half[2] - _ANGLE_ROUNDING >= 0.0:
@@ -308,6 +318,8 @@ def _tool_near(lengths, lower, step, cells, x, reach):
             b = a + lower[1] + (j + 0.5) * step[1]
             px = lengths[0] * np.cos(a) + lengths[1] * np.cos(b) - x[0]
             py = lengths[0] * np.sin(a) + lengths[1] * np.sin(b) - x[1]
+            if abs(np.sqrt(px * px + py * py) - lengths[2]) > reach + _FAR_BEYOND_ROUNDING:
+                continue  # the wrist is too near or too far for the last link to reach
             cos_b, sin_b = np.cos(b), np.sin(b)
             for k in range(cells):
                 dx = px + lengths[2] * (cos_b * cos_c[k] - sin_b * sin_c[k])
