@@ -7,9 +7,11 @@ import pytest
 from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker, plan
+from ftplan_ros.core.failure_surface import FailureSurface
 from ftplan_ros.core.robot import PlanarChain
 from ftplan_ros.core.scene import Obstacle, Task
 from ftplan_ros.core.verification import (
+    _distinct_triangles,
     certify_simplices,
     certify_surface,
     goal_row_error,
@@ -75,6 +77,33 @@ def test_the_compiled_planar_certificate_is_sound_and_at_least_the_general_one(c
             assert general.min_clearance(points).min() > margin
         outcomes.add(ok)
     assert outcomes == {True, False} and fewer > 10
+
+
+def test_the_triangles_certified_cover_every_triangle_of_the_web():
+    """Every live triangle is certified, or is an edge or a corner of a proper one that is.
+
+    Webs with padded columns (a repeated last point), repeated paths and shared points,
+    as the recovery sheets build them, on a coarse lattice so that points coincide.
+    """
+    rng = np.random.default_rng(3)
+    for trial in range(200):
+        paths = rng.integers(0, 4, (int(rng.integers(2, 8)), int(rng.integers(2, 7)), 3)) * 0.5
+        for k in range(len(paths)):
+            if rng.random() < 0.5:  # padded: the column ends early
+                end = int(rng.integers(1, paths.shape[1]))
+                paths[k, end:] = paths[k, end - 1]
+        paths[:, 0] = paths[0, 0]
+        if len(paths) > 2 and rng.random() < 0.5:
+            paths[2] = paths[1]  # a cut: a repeated path
+        surface = FailureSurface(paths, 0, (), (0,))
+        ids = surface.vertex_ids
+        kept = [frozenset(ids[t]) for t in _distinct_triangles(surface)]
+        proper = [k for k in kept if len(k) == 3]
+        assert len(proper) == len(set(proper)), trial
+        for triangle in surface.triangles[surface.live_triangles]:
+            points = frozenset(ids[triangle])
+            assert points in kept or (len(points) < 3 and any(points <= k for k in proper)), \
+                (trial, sorted(points))
 
 
 def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():

@@ -323,15 +323,40 @@ def verify_surface(surface: FailureSurface, checker: CollisionChecker, task: Tas
 
 
 def _distinct_triangles(surface: FailureSurface) -> np.ndarray:
-    """(T', 3) the live triangles of S_F, each set of three points once."""
+    """(T', 3) the live triangles of S_F that certification needs, each set of points once.
+
+    A triangle with a repeated point (where a column is padded) is a segment or a point;
+    it is left out when it is an edge or a corner of a proper triangle kept: certifying
+    that triangle certifies it.
+    """
     triangles = surface.triangles[surface.live_triangles]
     points = surface.vertex_ids[triangles]
     keys = np.sort(points, axis=1).astype(np.int64)
     base = int(keys.max(initial=0)) + 1
     if base ** 3 < 2 ** 63:  # one integer per set: far faster than unique rows
-        keys = (keys[:, 0] * base + keys[:, 1]) * base + keys[:, 2]
-    _, first = np.unique(keys, axis=0, return_index=True)
-    return triangles[np.sort(first)]
+        codes = (keys[:, 0] * base + keys[:, 1]) * base + keys[:, 2]
+        _, first = np.unique(codes, return_index=True)
+    else:
+        _, first = np.unique(keys, axis=0, return_index=True)
+    first = np.sort(first)
+    keys = keys[first]
+    proper = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2])
+    covered = ~proper & _within_proper(keys, proper, base)
+    return triangles[first[~covered]]
+
+
+def _within_proper(keys: np.ndarray, proper: np.ndarray, base: int) -> np.ndarray:
+    """(T,) bool: whether each sorted point set (T, 3) is an edge or corner of a proper one.
+
+    `proper` (T,) marks the sets of three distinct points; ids are below `base`.
+    """
+    if base ** 2 >= 2 ** 63:  # too many points to pair in one integer: none is left out
+        return np.zeros(len(keys), dtype=bool)
+    ends = keys[proper]
+    edges = np.concatenate([ends[:, 0] * base + ends[:, 1], ends[:, 1] * base + ends[:, 2],
+                            ends[:, 0] * base + ends[:, 2]])
+    low, high = keys[:, 0], keys[:, 2]
+    return np.isin(low * base + high, edges) | ((low == high) & np.isin(low, ends))
 
 
 def _pieces(corners: np.ndarray) -> int:
