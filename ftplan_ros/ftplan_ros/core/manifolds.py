@@ -19,10 +19,11 @@ import logging
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 
+import numba
 import numpy as np
 
 from . import kernels
-from .angles import configuration_difference, wrap_configuration
+from .angles import configuration_difference, wrap_configuration, wrap_one
 from .collision import CollisionChecker
 from .continuation import CLOSED, STALLED, TOO_LONG, trace_curve
 from .robot import Robot, task_errors, task_residuals
@@ -288,6 +289,27 @@ def _cover(robot: Robot, thetas: np.ndarray, covered: np.ndarray, branch: SelfMo
     Only those not yet covered are measured.
     """
     open_ = np.flatnonzero(~covered)
-    gaps = configuration_difference(branch.points[None, :, :], thetas[open_, None, :],
-                                    robot.periodic)
-    covered[open_] = np.min(np.linalg.norm(gaps, axis=2), axis=1, initial=np.inf) < distance
+    covered[open_] = _near_points(np.ascontiguousarray(thetas[open_], dtype=float),
+                                  np.ascontiguousarray(branch.points, dtype=float),
+                                  robot.periodic.astype(np.bool_), float(distance))
+
+
+@numba.njit(cache=True)
+def _near_points(thetas, points, periodic, distance):
+    """(S,) bool: whether each configuration (S, n) lies within `distance` of some point (k, n).
+
+    Distances are Euclidean in joint space [rad], the shortest way round periodic joints.
+    """
+    out = np.zeros(thetas.shape[0], dtype=np.bool_)
+    for s in range(thetas.shape[0]):
+        for k in range(points.shape[0]):
+            total = 0.0
+            for a in range(thetas.shape[1]):
+                gap = points[k, a] - thetas[s, a]
+                if periodic[a]:
+                    gap = wrap_one(gap)
+                total += gap * gap
+            if np.sqrt(total) < distance:
+                out[s] = True
+                break
+    return out
