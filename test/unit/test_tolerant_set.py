@@ -453,17 +453,17 @@ def test_certified_cells_escape_by_the_flood_fill_referee(fig3a):
     rng = np.random.default_rng(12)
     x_goal = np.asarray(scene.task.goal, dtype=float)
     for joint in grid.joints:
-        cells = np.argwhere(grid.certified[joint] & grid.classes.certified)
+        cells = np.argwhere(grid.escape(joint).cells & grid.classes.certified)
         assert len(cells) > 1000
         for theta in sample_cells(grid.lattice, cells[rng.choice(len(cells), 6)], 1, rng):
             assert checker.min_clearance(theta[None])[0] > 0
             assert recoverable_in_plane(checker, theta, joint, x_goal, 180,
                                         goal_tolerance=scene.task.goal_tolerance)
         # Its goal configurations are exact, free and in certified cells.
-        goals = grid.goal_points[joint]
+        goals = grid.escape(joint).goal_points
         assert np.allclose(planar_fk(LINKS, goals), x_goal, atol=1e-9)
         assert checker.min_clearance(goals).min() > 0
-        assert grid.certified[joint][tuple(grid.lattice.cell_of(goals).T)].all()
+        assert grid.escape(joint).cells[tuple(grid.lattice.cell_of(goals).T)].all()
 
 
 def test_a_verified_plan_stays_in_the_liberal_cells(fig3a):

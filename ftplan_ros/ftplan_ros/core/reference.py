@@ -73,21 +73,27 @@ def proves_yes(grid: TolerantSet) -> bool:
     lengths = np.asarray(robot.link_lengths, dtype=float)
     found = components(inside, lattice.periodic)
     starts = preimage_samples(lengths, np.asarray(task.start, dtype=float), 8 * lattice.cells)
-    goals = np.vstack([grid.goal_points[j] for j in grid.joints] + [
+    goals = np.vstack([grid.escape(j).goal_points for j in grid.joints] + [
         preimage_samples(lengths, np.asarray(task.goal, dtype=float), 8 * lattice.cells)])
     return bool(np.intersect1d(_components_at(found, lattice, starts),
                                _components_at(found, lattice, goals)).size)
 
 
 def proves_no(grid: TolerantSet) -> bool:
-    """Whether no component of the cells that may meet G may hold both a start and a goal."""
-    outside = grid.liberal_all
-    if not outside.any():
-        return True
+    """Whether no component of the cells that may meet G may hold both a start and a goal.
+
+    The joints are taken in turn: once those so far leave no cell that may hold a start
+    (or a goal), none is left when every joint counts, and the rest need not be computed.
+    """
     lattice = grid.lattice
     robot, task = grid.scene.robot, grid.scene.task
     start = lattice.tool_near(robot, np.asarray(task.start, dtype=float))
     goal = grid.near_goal
+    outside = grid.classes.possible.copy()
+    for joint in grid.joints:
+        outside &= grid.liberal_escape(joint)
+        if not (outside & start).any() or not (outside & goal).any():
+            return True
     found = components(outside, lattice.periodic)
     shared = found.holding(start) & found.holding(goal)
     return not shared[1:].any()

@@ -30,8 +30,9 @@ Angles [rad], lengths [m]. The grid is the reference that decides whether a plan
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -115,37 +116,64 @@ def preimage_samples(lengths: np.ndarray, x: np.ndarray, count: int) -> np.ndarr
     return np.stack([first, second, phi[row] - first - second], axis=1)
 
 
+class Escape(NamedTuple):
+    """The cells certified to escape with one joint locked, and the goals that show it.
+
+    `cells` (N, N, N) bool; `goal_points` (g, 3) [rad] are the exact goal configurations
+    in their components, solved at the middle of sub-slab `goal_slabs` (g,) (layer · m + k)
+    of m = `sub_slabs` per layer.
+    """
+
+    cells: np.ndarray
+    goal_points: np.ndarray
+    goal_slabs: np.ndarray
+    sub_slabs: int
+
+
 @dataclass(frozen=True, eq=False)
 class TolerantSet:
     """G on a joint grid (see the module docstring) for a scene's task.
 
-    `certified[i]` (N, N, N) marks cells every configuration of which can escape with
-    joint i locked (under-approximation); `goal_points[i]` (g, 3) are the exact goal
-    configurations found in certified-escaping components, solved at the middle of
-    sub-slab `goal_slabs[i]` (g,) (layer · m + k, m = `sub_slabs[i]`). The cells that may
-    hold such a configuration (`liberal`, the over-approximation) are computed on first
-    use: only a proof that no plan exists needs them.
+    `escape(i)` holds the cells every configuration of which can escape with joint i
+    locked (under-approximation) and the goal configurations that show it; the cells that
+    may hold such a configuration (`liberal_escape(i)`, the over-approximation) are only
+    needed by a proof that no plan exists. Each is computed for one joint at a time, when
+    first asked for, so that a search that fails after one joint skips the others.
     """
 
     scene: Scene
     classes: CellClasses
     joints: tuple[int, ...]
-    certified: dict
-    goal_points: dict
-    goal_slabs: dict
-    sub_slabs: dict
+    _escapes: dict = field(default_factory=dict, init=False, repr=False)
+    _liberal_escapes: dict = field(default_factory=dict, init=False, repr=False)
 
     @property
     def lattice(self) -> JointLattice:
         """The grid."""
         return self.classes.lattice
 
+    def escape(self, joint: int) -> Escape:
+        """Return the side of G_joint certified from inside (`certified_escape`), computed once."""
+        if joint not in self._escapes:
+            self._escapes[joint] = certified_escape(self.scene, self.classes, joint)
+        return self._escapes[joint]
+
     @cached_property
     def certified_all(self) -> np.ndarray:
         """(N, N, N) bool: cells inside G for every tolerated joint (under-approximation)."""
+        return self.certified_holding(None)
+
+    def certified_holding(self, cells: np.ndarray | None) -> np.ndarray | None:
+        """`certified_all`, or None once the joints so far leave none of `cells` (k, 3) in it.
+
+        Joints are taken in turn: a cell out after one joint is out of G, so the joints
+        left need not be computed. With `cells` None, every joint is.
+        """
         out = self.classes.certified.copy()
         for joint in self.joints:
-            out &= self.certified[joint]
+            out &= self.escape(joint).cells
+            if cells is not None and not out[tuple(np.asarray(cells).T)].any():
+                return None
         return out
 
     @cached_property
@@ -155,27 +183,30 @@ class TolerantSet:
         return self.lattice.tool_near(self.scene.robot, np.asarray(task.goal, dtype=float),
                                       task.goal_tolerance)
 
-    @cached_property
-    def liberal(self) -> dict:
-        """{joint i: (N, N, N) bool}: cells that may escape with joint i locked.
+    def liberal_escape(self, joint: int) -> np.ndarray:
+        """(N, N, N) bool: cells that may escape with `joint` locked, computed once.
 
         A cell may escape when its layer component of possibly free cells holds a cell
         that may put the tool within the goal tolerance (`escape_liberal`).
         """
-        classes, lattice = self.classes, self.lattice
-        possibly_goal = self.near_goal & classes.possible
-        out = {}
-        for joint in self.joints:
-            found = layer_components(classes.possible, joint, lattice.periodic)
-            out[joint] = found.cells(found.holding(possibly_goal))
-        return out
+        if joint not in self._liberal_escapes:
+            classes = self.classes
+            found = layer_components(classes.possible, joint, self.lattice.periodic)
+            self._liberal_escapes[joint] = found.cells(found.holding(self.near_goal
+                                                                     & classes.possible))
+        return self._liberal_escapes[joint]
+
+    @property
+    def liberal(self) -> dict:
+        """{joint i: (N, N, N) bool}: cells that may escape with joint i locked."""
+        return {joint: self.liberal_escape(joint) for joint in self.joints}
 
     @cached_property
     def liberal_all(self) -> np.ndarray:
         """(N, N, N) bool: cells that may meet G (over-approximation)."""
         out = self.classes.possible.copy()
         for joint in self.joints:
-            out &= self.liberal[joint]
+            out &= self.liberal_escape(joint)
         return out
 
 
@@ -186,41 +217,43 @@ def sub_slab_count(robot: PlanarChain, step: float, joint: int, tolerance: float
 
 
 def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
-    """Compute G from inside on N = `cells` cells per joint for scene.task (the outside on use).
+    """Classify the N^3 cells (N = `cells` per joint) for G of scene.task; G itself on use.
 
     Free means clear of the disks by more than `margin` [m].
     """
     if not supports(scene):
         raise InputError('robot', 'the joint grid handles planar 3R arms among disks only')
     classes = classify_cells(scene, cells, margin)
-    robot, task = scene.robot, scene.task
-    lattice = classes.lattice
-    lengths = np.asarray(robot.link_lengths, dtype=float)
-    x_goal = np.asarray(task.goal, dtype=float)
-    certified, goals_of, slabs_of, subs = {}, {}, {}, {}
     for joint in scene.tolerated_joints:
-        # Components of certified free cells covering every sub-slab with a goal.
-        found = layer_components(classes.certified, joint, lattice.periodic)
-        m = sub_slab_count(robot, lattice.step[joint], joint, task.goal_tolerance)
-        if m > 62:
+        if sub_slab_count(scene.robot, classes.lattice.step[joint], joint,
+                          scene.task.goal_tolerance) > 62:
             raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
-        levels = lattice.lower[joint] + (np.arange(cells)[:, None]
-                                         + (np.arange(m)[None, :] + 0.5) / m) * lattice.step[joint]
-        points, slab = locked_goal_configurations_at(lengths, x_goal, joint, levels.ravel())
-        keep = lattice.inside(points)
-        points, slab = points[keep], slab[keep]
-        index = lattice.cell_of(points)
-        label = found.at(index)
-        coverage = np.zeros(found.count + 1, dtype=np.int64)
-        np.bitwise_or.at(coverage, label, np.left_shift(1, slab % m).astype(np.int64))
-        full = coverage == (1 << m) - 1
-        full[0] = False
-        certified[joint] = found.cells(full)
-        goals_of[joint] = points[full[label]]
-        slabs_of[joint] = slab[full[label]]
-        subs[joint] = m
-    return TolerantSet(scene, classes, tuple(scene.tolerated_joints), certified, goals_of,
-                       slabs_of, subs)
+    return TolerantSet(scene, classes, tuple(scene.tolerated_joints))
+
+
+def certified_escape(scene: Scene, classes: CellClasses, joint: int) -> Escape:
+    """Find the cells certified to escape with `joint` locked (`escape_certified`), and goals.
+
+    Components of certified free cells in each layer of the joint that cover every
+    sub-slab with an exact goal configuration.
+    """
+    robot, task, lattice = scene.robot, scene.task, classes.lattice
+    cells = lattice.cells
+    found = layer_components(classes.certified, joint, lattice.periodic)
+    m = sub_slab_count(robot, lattice.step[joint], joint, task.goal_tolerance)
+    levels = lattice.lower[joint] + (np.arange(cells)[:, None]
+                                     + (np.arange(m)[None, :] + 0.5) / m) * lattice.step[joint]
+    points, slab = locked_goal_configurations_at(np.asarray(robot.link_lengths, dtype=float),
+                                                 np.asarray(task.goal, dtype=float), joint,
+                                                 levels.ravel())
+    keep = lattice.inside(points)
+    points, slab = points[keep], slab[keep]
+    label = found.at(lattice.cell_of(points))
+    coverage = np.zeros(found.count + 1, dtype=np.int64)
+    np.bitwise_or.at(coverage, label, np.left_shift(1, slab % m).astype(np.int64))
+    full = coverage == (1 << m) - 1
+    full[0] = False
+    return Escape(found.cells(full), points[full[label]], slab[full[label]], m)
 
 
 def locked_goal_configurations_at(lengths: np.ndarray, x: np.ndarray, joint: int,

@@ -192,9 +192,6 @@ def _nominal_cells(grid: TolerantSet, start_configuration: np.ndarray | None,
 
     Starts that `prefer_starts` marks are tried first.
     """
-    inside = grid.certified_all
-    if not inside.any():
-        return None
     lattice = grid.lattice
     robot, task = grid.scene.robot, grid.scene.task
     lengths = np.asarray(robot.link_lengths, dtype=float)
@@ -203,12 +200,16 @@ def _nominal_cells(grid: TolerantSet, start_configuration: np.ndarray | None,
     else:
         starts = preimage_samples(lengths, np.asarray(task.start, dtype=float),
                                   8 * lattice.cells)
-    goals = np.vstack([grid.goal_points[j] for j in grid.joints]
+    starts = starts[lattice.inside(starts)]
+    start_cells = lattice.cell_of(starts)
+    inside = grid.certified_holding(start_cells)  # None: no start cell is in G
+    if inside is None:
+        return None
+    goals = np.vstack([grid.escape(j).goal_points for j in grid.joints]
                       + [preimage_samples(lengths, np.asarray(task.goal, dtype=float),
                                           8 * lattice.cells)])
-    starts = starts[lattice.inside(starts)]
     goals = goals[lattice.inside(goals)]
-    start_cells, goal_cells = lattice.cell_of(starts), lattice.cell_of(goals)
+    goal_cells = lattice.cell_of(goals)
     start_ok = inside[tuple(start_cells.T)]
     goal_ok = inside[tuple(goal_cells.T)]
     if not start_ok.any() or not goal_ok.any():
@@ -332,13 +333,14 @@ class _SheetBuilder:
         self.lower2 = self.lattice.lower[self.others]
         self.size = self.lattice.cells
         self.layers = np.moveaxis(grid.classes.certified, joint, 0)  # layer first
-        goals = grid.goal_points[joint]
+        escape = grid.escape(joint)
+        goals = escape.goal_points
         self.goal_points = goals
         # The goal samples by sub-slab: those of slab s are by_slab[first[s]:first[s + 1]],
         # in the order of goal_points.
-        slabs = grid.goal_slabs[joint]
+        slabs = escape.goal_slabs
         self.by_slab = np.argsort(slabs, kind='stable')
-        self.m = grid.sub_slabs[joint]
+        self.m = escape.sub_slabs
         self.slab_first = np.searchsorted(slabs[self.by_slab], np.arange(self.size * self.m + 1))
         self.goal_cells = self.lattice.cell_of(goals)[:, self.others]
         self.offsets2 = (gamma[:, self.others] - self.lower2) / self.step2  # [cell units]
