@@ -639,7 +639,8 @@ def _wrapped(surface: FailureSurface, periodic: np.ndarray) -> FailureSurface:
 
 # Grid helpers ---------------------------------------------------------------------------
 
-def _wrap_index(index: int, periodic: bool, size: int) -> int:
+@numba.njit(cache=True)
+def _wrap_index(index, periodic, size):
     """Return a cell index on an axis of `size` cells: wrapped if periodic, else clipped."""
     return index % size if periodic else min(max(index, 0), size - 1)
 
@@ -721,20 +722,19 @@ def _route_cells(points, periodic, size):
     Each segment's cells, then the last point's; indices are wrapped round the periodic
     axes and clipped to the grid along the others.
     """
-    pieces = [_piece_middles(points[k], points[k + 1]) for k in range(points.shape[0] - 1)]
-    pieces.append(_piece_middles(points[-1], points[-1]))
+    ends = np.vstack((points, points[-1:]))  # the last point: a segment of no length
+    pieces = [_piece_middles(ends[k], ends[k + 1]) for k in range(points.shape[0])]
     count = 0
     for middles in pieces:
         count += middles.shape[0]
     cells = np.empty((count, 2), dtype=np.int64)
     row = 0
-    for k, middles in enumerate(pieces):
-        a, b = points[min(k, points.shape[0] - 1)], points[min(k + 1, points.shape[0] - 1)]
-        for t in middles:
+    for k in range(points.shape[0]):
+        a, b = ends[k], ends[k + 1]
+        for t in pieces[k]:
             for axis in range(2):
-                index = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
-                cells[row, axis] = index % size if periodic[axis] else \
-                    min(max(index, 0), size - 1)
+                cells[row, axis] = _wrap_index(int(np.floor(a[axis] + t * (b[axis] - a[axis]))),
+                                               periodic[axis], size)
             row += 1
     return cells
 
