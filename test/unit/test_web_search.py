@@ -205,6 +205,17 @@ def test_the_shipped_sheets_scenes_are_solved_by_the_sheets_alone(name):
     assert not plan(scene, PlannerOptions(methods=(PAPER_METHOD,))).feasible
     result = plan(scene)
     assert result.feasible and result.stats['method'] == METHOD
+    # The paper's second round of starts waited for the sheets, which planned: it never ran.
+    assert result.stats['paper_plan_stats']['candidate_subdivisions'] == 1
+
+
+def test_the_papers_second_round_runs_when_the_sheets_decide_nothing():
+    """A grid too coarse to plan or to prove: the paper's finer starts are tried after it."""
+    result = plan(load_scene(SCENES / 'crowded_sheets_100.yaml'),
+                  PlannerOptions(sheet_cells=(32,)))
+    assert not result.feasible and not result.stats['proved_infeasible']
+    assert result.stats['candidate_subdivisions'] == PlannerOptions().candidate_refinement
+    assert result.reason.startswith('no failure-tolerant plan found within the resolution')
 
 
 def test_the_grid_search_finds_a_shortest_path_through_the_mask():

@@ -99,8 +99,14 @@ class SurfaceSearch:
         self.x_s = np.asarray(self.task.start, dtype=float)
         self.x_g = np.asarray(self.task.goal, dtype=float)
 
-    def run(self, start_configuration: np.ndarray | None = None) -> PlanResult:
-        """Run Steps 1-6 and the self-check; with a start configuration, only that θ_s."""
+    def run(self, start_configuration: np.ndarray | None = None,
+            subdivisions: tuple[int, ...] | None = None) -> PlanResult:
+        """Run Steps 1-6 and the self-check; with a start configuration, only that θ_s.
+
+        Start candidates come in rounds of `subdivisions` per manifold step, each round
+        only when the ones before found nothing: by default one, then
+        `options.candidate_refinement`.
+        """
         M_s, M_g = self.manifolds()
         arcs = goal_free_arcs(M_g, self.margin)
         stats: dict = {'criterion': CRITERION, 'start_branches': len(M_s),
@@ -110,7 +116,7 @@ class SurfaceSearch:
         # Candidates one step apart along M_s and, when that finds nothing, between them
         # (a narrow band of good starts).
         refinements = [None] if start_configuration is not None else \
-            [1, self.options.candidate_refinement]
+            list(subdivisions or (1, self.options.candidate_refinement))
         for subdivisions in refinements:
             if subdivisions is None:
                 candidates = self._given_start(start_configuration)

@@ -77,22 +77,39 @@ def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
     resolution, after the paper's own reason.
     """
     result = replace(result, stats={'method': PAPER_METHOD} | result.stats)
-    if result.feasible or METHOD not in options.methods or not supports(scene):
+    if result.feasible or not sheets_apply(scene, options):
         return result
     if result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0:
         # No start passes the necessary condition (eq. 6) for every joint, with starts a
         # quarter step apart along M_s: no plan has room to start (not a proof).
         return result
-    sheets = WebSearch(scene, options, report, start_configuration,
-                       prefer_starts).run(previous=result)
-    stats = result.stats | {f'sheets_{key}': value for key, value in sheets.stats.items()
-                            if key not in ('method', 'tolerated_joints')}
+    return with_sheets(result, WebSearch(scene, options, report, start_configuration,
+                                         prefer_starts).run(previous=result))
+
+
+def with_sheets(paper: PlanResult, sheets: PlanResult) -> PlanResult:
+    """Combine the paper's result with the recovery sheets' (`WebSearch.run`).
+
+    The paper's plan if it has one, else the sheets', else a failure that says whether
+    the grid proved that no plan exists or found none at its resolution, after the
+    paper's own reason.
+    """
+    paper = replace(paper, stats={'method': PAPER_METHOD} | paper.stats)
+    if paper.feasible:
+        return paper
     if sheets.feasible:
-        return replace(sheets, stats=sheets.stats | {'paper_reason': result.reason,
-                                                     'paper_plan_stats': result.stats})
+        return replace(sheets, stats=sheets.stats | {'paper_reason': paper.reason,
+                                                     'paper_plan_stats': paper.stats})
+    stats = paper.stats | {f'sheets_{key}': value for key, value in sheets.stats.items()
+                           if key not in ('method', 'tolerated_joints')}
     stats['proved_infeasible'] = bool(sheets.stats.get('proved_infeasible', False))
-    return replace(result, stats=stats, reason=f'{sheets.reason}; the paper\'s surface: '
-                   f'{result.reason}')
+    return replace(paper, stats=stats, reason=f'{sheets.reason}; the paper\'s surface: '
+                   f'{paper.reason}')
+
+
+def sheets_apply(scene: Scene, options: PlannerOptions) -> bool:
+    """Whether the recovery sheets follow the paper's search: listed, planar 3R among disks."""
+    return METHOD in options.methods and supports(scene)
 
 
 class WebSearch:
