@@ -11,6 +11,7 @@ from ftplan_ros.core.failure_surface import FailureSurface
 from ftplan_ros.core.robot import PlanarChain
 from ftplan_ros.core.scene import Obstacle, Task
 from ftplan_ros.core.verification import (
+    LARGEST_ANGLE,
     _distinct_triangles,
     certify_simplices,
     certify_surface,
@@ -104,6 +105,37 @@ def test_the_triangles_certified_cover_every_triangle_of_the_web():
             points = frozenset(ids[triangle])
             assert points in kept or (len(points) < 3 and any(points <= k for k in proper)), \
                 (trial, sorted(points))
+
+
+@pytest.mark.parametrize('angle', [1e17, 6e307, 1e308])
+def test_huge_finite_angles_fail_closed(angle):
+    """Angles whose kinematics round by radians, or whose corner sums overflow, are refused.
+
+    (Both used to be certified: a corner sum of inf gave NaN distances that min() dropped.)
+    A disk on the tool at the middle corner: each simplex collides there.
+    """
+    theta = np.array([angle, -angle, 0.0])
+    tip = ARM.joint_positions(theta)[-1]
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (tip[0], tip[1], 0.0), radius=0.3)])
+    assert checker.min_clearance(theta[None])[0] < 0.0
+    for corners in ([theta, theta + [0, 0, 0.01], theta - [0, 0, 0.01]],
+                    [theta, theta + [0, 0, 0.01]]):
+        ok, failed, _, _ = certify_simplices(checker, np.array([corners]), 0.0, 7)
+        assert not ok and failed == 0
+    moderate = np.array([LARGEST_ANGLE, -LARGEST_ANGLE, 0.0])  # the largest still measured
+    assert certify_simplices(CollisionChecker(ARM, []),
+                             np.array([[moderate, moderate - [0.01, -0.01, 0.01]]]), 0.0, 7)[0]
+
+
+def test_a_web_of_one_path_is_certified_along_its_segments():
+    """No triangle: S_F is the path itself, and a disk across it fails the certificate."""
+    path = np.array([0.0, 0.5, 0.5]) + np.linspace(0.0, 1.0, 8)[:, None] * [0.0, 0.5, 0.7]
+    surface = FailureSurface(path[None], 0, (0,), (0,))
+    middle = ARM.joint_positions(path[4])[2]
+    task = Task(tuple(ARM.joint_positions(path[0])[-1]), tuple(ARM.joint_positions(path[-1])[-1]))
+    blocked = CollisionChecker(ARM, [Obstacle('sphere', (middle[0], middle[1], 0.0), radius=0.3)])
+    assert not certify_surface(surface, blocked, task).ok
+    assert certify_surface(surface, CollisionChecker(ARM, []), task).ok
 
 
 def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():

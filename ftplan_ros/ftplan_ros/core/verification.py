@@ -49,6 +49,10 @@ from .slices import slice_problem
 # Certified clearance must beat the motion bound by this much [m]: absorbs the rounding
 # of the clearance computation (about 1e-8 m near contact).
 _ROUNDING = 1e-6
+# [rad] the largest joint angle certified: beyond it the forward kinematics rounds by more
+# than _ROUNDING (at 1e17 rad the arm's computed pose jumps by whole radians) and sums of
+# corners overflow. A web is lifted a few turns at most.
+LARGEST_ANGLE = 1e3
 
 
 @dataclass(frozen=True)
@@ -87,14 +91,16 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
 
     `corners` (S, c, n) [rad] are segments (c = 2) or triangles (c = 3) in joint space.
     Returns (ok, index of the first simplex that failed or -1, smallest clearance sampled
-    [m], number of clearance samples).
+    [m], number of clearance samples). A simplex with a corner that is not finite or lies
+    beyond `LARGEST_ANGLE` fails unmeasured.
     """
     arms = checker.lever_arms()
     roots = np.arange(len(corners))
     smallest = np.inf
     samples = 0
-    if not np.all(np.isfinite(corners)):
-        return False, int(np.flatnonzero(~np.isfinite(corners).all(axis=(1, 2)))[0]), np.nan, 0
+    measurable = np.all(np.abs(corners) <= LARGEST_ANGLE, axis=(1, 2))  # False for NaN too
+    if not measurable.all():
+        return False, int(np.flatnonzero(~measurable)[0]), np.nan, 0
     for _ in range(max_depth + 1):
         if len(corners) == 0:
             return True, -1, float(smallest), samples
@@ -263,6 +269,10 @@ def certify_surface(surface: FailureSurface, checker: CollisionChecker, task: Ta
                        f'{task.orientation_tolerance} rad)', max_goal_error=position,
                        max_orientation_error=orientation)
     triangles = _distinct_triangles(surface)
+    if not len(triangles):  # S_F is a single path: its segments are all there is
+        n_points = surface.paths.shape[1]
+        starts = np.arange(len(surface.vertices)).reshape(-1, n_points)[:, :-1].ravel()
+        triangles = np.stack([starts, starts + 1], axis=1)
     corners = surface.vertices[triangles]
     ok, failed, smallest, samples = certify_simplices(checker, corners, options.margin,
                                                       options.max_depth)
