@@ -169,6 +169,7 @@ def test_stopping_at_the_first_joints_never_changes_an_answer():
                 stopped += 1
     assert stopped and early  # some scenes' starts (or goals) are out after the first joint
 
+
 def test_the_reference_takes_planar_3r_arms_among_disks_only():
     boxed = paper_scene().with_obstacles([Obstacle('box', (1.5, 1.5, 0.0), size=(0.2, 0.2, 0.2))])
     with pytest.raises(ValueError, match='planar 3R arms among disks'):
