@@ -220,12 +220,14 @@ def _runs(mask, words, shape, axes, joined, wrap):
     first = np.empty(lines + 1, dtype=np.int64)  # line l holds runs first[l]..first[l+1]-1
     starts = np.empty(lines * ((size_r + 1) // 2), dtype=np.int32)
     ends = np.empty_like(starts)
-    if step_q == 1 and step_r != 1:
+    # Lines run along the last axis (their cells side by side) when it is among `across`;
+    # otherwise the last axis is one of the line axes: neighbouring lines lie side by side.
+    if step_r == 1:
+        count = _line_runs(mask, words, size_p, size_q, size_r, step_p, step_q, first, starts,
+                           ends)
+    else:
         count = _plane_runs(mask, words, size_p, size_q, size_r, step_p, step_r, first, starts,
                             ends)
-    else:
-        count = _line_runs(mask, words, size_p, size_q, size_r, step_p, step_q, step_r, first,
-                           starts, ends)
     first[lines] = count
     parent = np.arange(count, dtype=np.int32)
     # Each pair of neighbouring lines once: the neighbours one step back (as C order).
@@ -262,32 +264,23 @@ def _runs(mask, words, shape, axes, joined, wrap):
 
 
 @numba.njit(cache=True)
-def _line_runs(mask, words, size_p, size_q, size_r, step_p, step_q, step_r, first, starts,
-               ends):
-    """Find `_runs`'s runs line by line; fill first[:-1], starts and ends, return their number."""
+def _line_runs(mask, words, size_p, size_q, size_r, step_p, step_q, first, starts, ends):
+    """Find `_runs`'s runs line by line, each line's cells side by side (`_next_change`).
+
+    Fills first[:-1], starts and ends; returns the number of runs.
+    """
     count = 0
     for line in range(size_p * size_q):
         first[line] = count
         base = (line // size_q) * step_p + (line % size_q) * step_q
-        if step_r == 1:  # the line's cells lie side by side: words of them are skipped at once
-            stop = base + size_r
-            r = _next_change(mask, words, base, stop, False)
-            while r < stop:
-                end = _next_change(mask, words, r + 1, stop, True)
-                starts[count] = r - base
-                ends[count] = end - 1 - base
-                count += 1
-                r = _next_change(mask, words, end, stop, False)
-            continue
-        r = 0
-        while r < size_r:
-            if mask[base + r * step_r]:
-                starts[count] = r
-                while r + 1 < size_r and mask[base + (r + 1) * step_r]:
-                    r += 1
-                ends[count] = r
-                count += 1
-            r += 1
+        stop = base + size_r
+        r = _next_change(mask, words, base, stop, False)
+        while r < stop:
+            end = _next_change(mask, words, r + 1, stop, True)
+            starts[count] = r - base
+            ends[count] = end - 1 - base
+            count += 1
+            r = _next_change(mask, words, end, stop, False)
     return count
 
 
