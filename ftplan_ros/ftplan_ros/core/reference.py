@@ -89,11 +89,9 @@ def proves_no(grid: TolerantSet) -> bool:
     robot, task = grid.scene.robot, grid.scene.task
     start = lattice.tool_near(robot, np.asarray(task.start, dtype=float))
     goal = grid.near_goal
-    outside = grid.classes.possible.copy()
-    for joint in grid.joints:
-        outside &= grid.liberal_escape(joint)
-        if not (outside & start).any() or not (outside & goal).any():
-            return True
+    outside = grid.liberal_holding((start, goal))
+    if outside is None:
+        return True
     found = components(outside, lattice.periodic)
     shared = found.holding(start) & found.holding(goal)
     return not shared[1:].any()

@@ -196,17 +196,21 @@ class TolerantSet:
                                                                      & classes.possible))
         return self._liberal_escapes[joint]
 
-    @property
-    def liberal(self) -> dict:
-        """{joint i: (N, N, N) bool}: cells that may escape with joint i locked."""
-        return {joint: self.liberal_escape(joint) for joint in self.joints}
-
     @cached_property
     def liberal_all(self) -> np.ndarray:
         """(N, N, N) bool: cells that may meet G (over-approximation)."""
+        return self.liberal_holding(())
+
+    def liberal_holding(self, masks: tuple[np.ndarray, ...]) -> np.ndarray | None:
+        """`liberal_all`, or None once the joints so far leave no cell of some mask in it.
+
+        `masks` are (N, N, N) bool; joints are taken in turn, as `certified_holding` does.
+        """
         out = self.classes.possible.copy()
         for joint in self.joints:
             out &= self.liberal_escape(joint)
+            if not all((out & mask).any() for mask in masks):
+                return None
         return out
 
 
