@@ -270,9 +270,7 @@ def certify_surface(surface: FailureSurface, checker: CollisionChecker, task: Ta
                        max_orientation_error=orientation)
     triangles = _distinct_triangles(surface)
     if not len(triangles):  # S_F is a single path: its segments are all there is
-        n_points = surface.paths.shape[1]
-        starts = np.arange(len(surface.vertices)).reshape(-1, n_points)[:, :-1].ravel()
-        triangles = np.stack([starts, starts + 1], axis=1)
+        triangles = surface.edges[:surface.rung_edge(0, 0)]  # the path edges come first
     corners = surface.vertices[triangles]
     ok, failed, smallest, samples = certify_simplices(checker, corners, options.margin,
                                                       options.max_depth)
