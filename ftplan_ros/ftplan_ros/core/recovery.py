@@ -193,26 +193,30 @@ def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, s
     local[ids] = np.arange(len(ids))
     points = np.empty((len(ids), n))
     points[len(ids) - 1] = start
-    degree = np.zeros(len(ids) + 1, dtype=np.int64)
+    # Arcs join every two distinct nodes of a triangle; as lists of neighbours (CSR).
+    tails = np.empty(count * 42, dtype=np.int64)
+    heads = np.empty(count * 42, dtype=np.int64)
+    arcs = 0
     for c in range(count):
         for k in range(7):
-            if slots[c, k] >= 0:
-                points[local[slots[c, k]]] = coordinates[c, k]
-                for q in range(7):
-                    if q != k and slots[c, q] >= 0 and slots[c, q] != slots[c, k]:
-                        degree[local[slots[c, k]] + 1] += 1
-    points[:, joint] = level
-    first = np.cumsum(degree)
-    neighbours = np.empty(first[-1], dtype=np.int64)
-    filled = first[:-1].copy()
-    for c in range(count):
-        for k in range(7):
+            if slots[c, k] < 0:
+                continue
+            points[local[slots[c, k]]] = coordinates[c, k]
             for q in range(7):
-                if q != k and slots[c, k] >= 0 and slots[c, q] >= 0 and \
-                        slots[c, q] != slots[c, k]:
-                    node = local[slots[c, k]]
-                    neighbours[filled[node]] = local[slots[c, q]]
-                    filled[node] += 1
+                if q != k and slots[c, q] >= 0 and slots[c, q] != slots[c, k]:
+                    tails[arcs] = local[slots[c, k]]
+                    heads[arcs] = local[slots[c, q]]
+                    arcs += 1
+    points[:, joint] = level
+    first = np.zeros(len(ids) + 1, dtype=np.int64)
+    for e in range(arcs):
+        first[tails[e] + 1] += 1
+    first = np.cumsum(first)
+    neighbours = np.empty(arcs, dtype=np.int64)
+    filled = first[:-1].copy()
+    for e in range(arcs):
+        neighbours[filled[tails[e]]] = heads[e]
+        filled[tails[e]] += 1
 
     # Dijkstra from the start.
     origin = len(ids) - 1
