@@ -349,22 +349,39 @@ def _distinct_triangles(surface: FailureSurface) -> np.ndarray:
     first = np.sort(first)
     keys = keys[first]
     proper = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2])
-    covered = ~proper & _within_proper(keys, proper, base)
+    covered = np.zeros(len(keys), dtype=bool)
+    covered[~proper] = _within_proper(keys[~proper], keys[proper], base)
     return triangles[first[~covered]]
 
 
 def _within_proper(keys: np.ndarray, proper: np.ndarray, base: int) -> np.ndarray:
     """(T,) bool: whether each sorted point set (T, 3) is an edge or corner of a proper one.
 
-    `proper` (T,) marks the sets of three distinct points; ids are below `base`.
+    `proper` (P, 3) are sorted sets of three distinct points; ids are below `base`.
     """
     if base ** 2 >= 2 ** 63:  # too many points to pair in one integer: none is left out
         return np.zeros(len(keys), dtype=bool)
-    ends = keys[proper]
-    edges = np.concatenate([ends[:, 0] * base + ends[:, 1], ends[:, 1] * base + ends[:, 2],
-                            ends[:, 0] * base + ends[:, 2]])
+    edges = np.concatenate([proper[:, 0] * base + proper[:, 1],
+                            proper[:, 1] * base + proper[:, 2],
+                            proper[:, 0] * base + proper[:, 2]])
     low, high = keys[:, 0], keys[:, 2]
-    return np.isin(low * base + high, edges) | ((low == high) & np.isin(low, ends))
+    return _found_in(low * base + high, edges) | ((low == high) & _found_in(low, proper))
+
+
+def _found_in(values: np.ndarray, pool: np.ndarray) -> np.ndarray:
+    """(V,) bool: whether each of a few integers `values` occurs in the large array `pool`.
+
+    The pool is searched in the sorted values, not sorted itself: np.isin would sort the
+    pool or build a table over its range, either far slower for a handful of values.
+    """
+    wanted = np.unique(values)
+    if not len(wanted):
+        return np.zeros(len(values), dtype=bool)
+    pool = pool.ravel()
+    at = np.minimum(np.searchsorted(wanted, pool), len(wanted) - 1)
+    present = np.zeros(len(wanted), dtype=bool)
+    present[at[wanted[at] == pool]] = True
+    return present[np.searchsorted(wanted, values)]
 
 
 def _pieces(corners: np.ndarray) -> int:
