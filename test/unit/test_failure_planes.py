@@ -10,8 +10,6 @@ from ftplan_ros.core.collision import CollisionChecker
 from ftplan_ros.core.failure_planes import FailurePlaneHit, crossing_segments, failure_plane_hits
 from ftplan_ros.core.failure_surface import (
     choose_hits,
-    hit_positions,
-    nearest_hits,
     smallest_windows,
 )
 from ftplan_ros.core.manifolds import (
@@ -111,9 +109,34 @@ def test_every_exact_failure_plane_solution_is_found(goal_branches):
 
 def test_crossings_skip_the_wrap_jump():
     values = np.array([3.0, 3.1, -3.1, -3.0])  # crosses ±π, not the level 0
-    assert not crossing_segments(values, np.array([0.0]), periodic=True).any()
-    assert crossing_segments(values, np.array([3.12]), periodic=True)[0, 1]
-    assert crossing_segments(np.array([-0.1, 0.1]), np.array([0.0]), periodic=False)[0, 0]
+    assert not len(crossing_segments(values, np.array([0.0]), periodic=True)[0])
+    assert [s.tolist() for s in crossing_segments(values, np.array([3.12]), periodic=True)] \
+        == [[0], [1]]
+    assert [s.tolist() for s in crossing_segments(np.array([-0.1, 0.1]), np.array([0.0]),
+                                                  periodic=False)] == [[0], [0]]
+
+
+@pytest.mark.parametrize('periodic', [False, True])
+def test_crossings_are_the_sign_changes_of_the_difference(periodic):
+    """The pairs against the definition written with whole arrays, and `first_only`."""
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        values = np.cumsum(rng.normal(0.0, 0.4, rng.integers(1, 40)))
+        if periodic:
+            values = np.angle(np.exp(1j * values))
+        levels = rng.uniform(-3.0, 3.0, rng.integers(0, 6))
+        difference = values[None, :] - levels[:, None]
+        if periodic:
+            difference = np.angle(np.exp(1j * difference))
+        sign = difference < 0.0
+        change = sign[:, 1:] != sign[:, :-1]
+        if periodic:
+            change &= np.abs(np.diff(difference, axis=1)) < np.pi
+        which, segment = crossing_segments(values, levels, periodic)
+        assert np.array_equal(np.stack([which, segment]), np.stack(np.nonzero(change)))
+        first, at = crossing_segments(values, levels, periodic, first_only=True)
+        assert np.array_equal(first, np.flatnonzero(change.any(axis=1)))
+        assert np.array_equal(at, np.argmax(change[first], axis=1))
 
 
 @pytest.mark.parametrize('name', sorted(TABLE_I))
@@ -167,22 +190,51 @@ def test_a_loop_free_all_round_comes_as_two_laps(goal_branches):
         assert np.allclose(points[arc.lap:], points[:arc.lap] + branch.period)
 
 
-def test_nearest_hits_picks_the_hit_nearest_each_windows_middle():
-    """The batched choice against its definition: inside the window, nearest the middle."""
+def _windows_by_definition(hits: list[list[float]], lap: float) -> list[tuple[float, float]]:
+    """Each left hit's window to the nearest right end completing the joints, O(H^2)."""
+    flat = sorted((p, j) for j, positions in enumerate(hits) for p in positions)
+    windows = []
+    for left in range(len(flat)):
+        for right in range(left, len(flat)):
+            if len({j for _, j in flat[left:right + 1]}) == len(hits):
+                window = (flat[left][0], flat[right][0])
+                if window not in windows and window[0] < lap:
+                    windows.append(window)
+                break
+    return sorted(windows, key=lambda w: w[1] - w[0])
+
+
+def test_smallest_windows_and_the_hits_nearest_each_windows_middle():
+    """The batched sweep against its definition: windows, then inside and nearest the middle."""
     rng = np.random.default_rng(4)
-    for _ in range(100):
-        hits = [[[FailurePlaneHit(j, np.full(3, float(k)), float(p))
-                  for k, p in enumerate(np.round(rng.uniform(0, 20, rng.integers(1, 6)), 1))]
-                 for j in range(3)] for _ in range(rng.integers(1, 4))]
-        windows = [(s, w) for s, per_start in enumerate(hits) for w in smallest_windows(per_start)]
-        chosen = nearest_hits(hit_positions(hits), [w for _, w in windows],
-                              [s for s, _ in windows])
-        for (s, window), row in zip(windows, chosen, strict=True):
-            middle = 0.5 * (window[0] + window[1])
-            for joint_hits, k in zip(hits[s], row, strict=True):
-                inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
-                assert joint_hits[k] is min(inside, key=lambda h: abs(h.position - middle))
-            assert [h.position for h in choose_hits(hits[s], window)] == \
-                [joint_hits[k].position for joint_hits, k in zip(hits[s], row, strict=True)]
+    for _ in range(200):
+        n_starts, n_joints, lap = rng.integers(1, 4), rng.integers(1, 4), rng.uniform(5, 25)
+        hits = [[[FailurePlaneHit(j, np.full(3, float(k)), float(p)) for k, p in
+                  enumerate(np.sort(np.round(rng.uniform(0, 20, rng.integers(1, 6)), 1)))]
+                 for j in range(n_joints)] for _ in range(n_starts)]
+        flat = [(s, j, h) for s, per_start in enumerate(hits)
+                for j, joint_hits in enumerate(per_start) for h in joint_hits]
+        # Shuffled, but each start's hits of a joint in order along the arc, as promised.
+        keys = rng.random(len(flat))
+        groups = np.array([s * n_joints + j for s, j, _ in flat])
+        for group in np.unique(groups):
+            keys[groups == group] = np.sort(keys[groups == group])
+        flat = [flat[i] for i in np.argsort(keys)]
+        owners, windows, chosen = smallest_windows(
+            np.array([s for s, _, _ in flat]), np.array([j for _, j, _ in flat]),
+            np.array([h.position for _, _, h in flat]), n_starts, n_joints, lap)
+        for s, per_start in enumerate(hits):
+            mine = owners == s
+            assert [tuple(w) for w in windows[mine]] == _windows_by_definition(
+                [[h.position for h in joint_hits] for joint_hits in per_start], lap)
+            for window, row in zip(windows[mine], chosen[mine], strict=True):
+                middle = 0.5 * (window[0] + window[1])
+                for j, joint_hits in enumerate(per_start):
+                    inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
+                    picked = flat[row[j]]
+                    assert picked[:2] == (s, j)
+                    assert picked[2] is min(inside, key=lambda h: abs(h.position - middle))
+                assert [h.position for h in choose_hits(per_start, tuple(window))] == \
+                    [flat[k][2].position for k in row]
     with pytest.raises(ValueError, match='holds no hit'):
         choose_hits([[FailurePlaneHit(0, np.zeros(3), 5.0)]], (0.0, 1.0))

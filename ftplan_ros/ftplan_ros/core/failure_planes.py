@@ -65,21 +65,27 @@ def goal_free_arcs(goal_branches: tuple[SelfMotionManifold, ...], margin: float,
     return arcs
 
 
-def crossing_segments(values: np.ndarray, levels: np.ndarray, periodic: bool) -> np.ndarray:
-    """Where levels (C,) cross the sampled curve values (K,) [rad]: bool (C, K-1).
+def crossing_segments(values: np.ndarray, levels: np.ndarray, periodic: bool,
+                      first_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Where levels (C,) cross the sampled curve values (K,) [rad]: pairs (level, segment).
 
-    Segment k joins samples k and k+1. For a periodic joint the difference is wrapped, and
-    a jump across ±π between neighbours is not a crossing (neighbours are close).
+    Segment k joins samples k and k+1; the pairs (H,) each come level by level, segments in
+    order, and with `first_only` only each level's first crossing. For a periodic joint the
+    difference is wrapped, and a jump across ±π between neighbours is not a crossing
+    (neighbours are close).
     """
     return _crossings(np.ascontiguousarray(values, dtype=float),
-                      np.ascontiguousarray(levels, dtype=float), bool(periodic))
+                      np.ascontiguousarray(levels, dtype=float), bool(periodic), first_only)
 
 
 @numba.njit(cache=True)
-def _crossings(values, levels, periodic):
-    """`crossing_segments` in one compiled pass (no (C, K) temporaries)."""
+def _crossings(values, levels, periodic, first_only):
+    """`crossing_segments` in one compiled pass."""
     count = values.shape[0]
-    out = np.zeros((levels.shape[0], max(count - 1, 0)), dtype=np.bool_)
+    most = levels.shape[0] if first_only else levels.shape[0] * max(count - 1, 0)
+    which = np.empty(most, dtype=np.int64)
+    segment = np.empty(most, dtype=np.int64)
+    found = 0
     for c in range(levels.shape[0]):
         before = values[0] - levels[c]
         if periodic:
@@ -89,9 +95,13 @@ def _crossings(values, levels, periodic):
             if periodic:
                 after = wrap_one(after)
             if (before < 0.0) != (after < 0.0) and (not periodic or abs(after - before) < np.pi):
-                out[c, k - 1] = True
+                which[found] = c
+                segment[found] = k - 1
+                found += 1
+                if first_only:
+                    break
             before = after
-    return out
+    return which[:found].copy(), segment[:found].copy()
 
 
 def necessary_condition(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray,
@@ -101,8 +111,12 @@ def necessary_condition(robot: Robot, candidates: np.ndarray, arc_points: np.nda
     Column k is joint `joints[k]` (the tolerated joints).
     """
     periodic = robot.periodic
-    return np.stack([crossing_segments(arc_points[:, i], candidates[:, i], periodic[i]).any(axis=1)
-                     for i in joints], axis=1).reshape(len(candidates), len(joints))
+    out = np.zeros((len(candidates), len(joints)), dtype=bool)
+    for k, i in enumerate(joints):
+        which, _ = crossing_segments(arc_points[:, i], candidates[:, i], periodic[i],
+                                     first_only=True)
+        out[which, k] = True
+    return out
 
 
 def chord_crossings(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray, joint: int,
@@ -115,8 +129,7 @@ def chord_crossings(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray
     """
     periodic = bool(robot.periodic[joint])
     values = arc_points[:, joint]
-    change = crossing_segments(values, candidates[:, joint], periodic)
-    which, segment = np.nonzero(change)
+    which, segment = crossing_segments(values, candidates[:, joint], periodic)
     before = values[segment] - candidates[which, joint]
     if periodic:
         before = wrap_angle(before)

@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from .failure_planes import FailurePlaneHit
@@ -243,29 +244,81 @@ def build_failure_surface(theta_s: np.ndarray, arc_points: np.ndarray,
     return FailureSurface(paths, nominal, hit_paths, tolerated)
 
 
-def smallest_windows(hits: list[list[FailurePlaneHit]]) -> list[tuple[float, float]]:
-    """Minimal arc windows (first, last) holding a hit of every joint in `hits`, shortest first.
+def smallest_windows(starts: np.ndarray, joints: np.ndarray, positions: np.ndarray,
+                     n_starts: int, n_joints: int, lap: float = np.inf,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each start's minimal arc windows holding a hit of every joint, and the hits to use.
 
-    The classic two-pointer sweep over hits sorted by position: for each left hit, the
-    nearest right end that completes the set of joints.
+    Hits come flat: the start (H,) in [0, n_starts) and the joint (H,) in [0, n_joints)
+    each belongs to, and its position (H,) along the arc [arc points], each start's hits
+    of a joint in order along the arc. For every start, the classic two-pointer sweep over
+    its hits sorted by (position, joint) finds, for each left hit, the nearest right end
+    that completes the set of joints. Windows starting at `lap` or beyond are dropped; the
+    rest come start by start, shortest first.
+
+    Returns the owners (W,) (start indices), the windows (W, 2) (first, last) [arc points]
+    and, per window and joint, the hit inside it nearest its middle (the first of equally
+    near ones): indices (W, n_joints) into the flat arrays.
     """
-    flat = sorted((hit.position, hit.joint) for joint_hits in hits for hit in joint_hits)
-    n_joints = len(hits)
-    windows = set()
-    counts: dict[int, int] = {}
-    right = 0
-    for left in range(len(flat)):
-        while len(counts) < n_joints and right < len(flat):
-            counts[flat[right][1]] = counts.get(flat[right][1], 0) + 1
-            right += 1
-        if len(counts) < n_joints:
-            break
-        windows.add((flat[left][0], flat[right - 1][0]))
-        joint = flat[left][1]
-        counts[joint] -= 1
-        if counts[joint] == 0:
-            del counts[joint]
-    return sorted(windows, key=lambda w: w[1] - w[0])
+    starts = np.asarray(starts, dtype=np.int64)
+    joints = np.asarray(joints, dtype=np.int64)
+    positions = np.asarray(positions, dtype=float)
+    order = np.lexsort((joints, positions, starts))
+    bounds = np.searchsorted(starts[order], np.arange(n_starts + 1))
+    return _sweep_windows(order, joints, positions, bounds, n_joints, float(lap))
+
+
+@numba.njit(cache=True)
+def _sweep_windows(order, joints, positions, bounds, n_joints, lap):
+    """`smallest_windows` start by start over the hits in sorted `order`."""
+    total = order.shape[0]
+    owners = np.empty(total, dtype=np.int64)
+    windows = np.empty((total, 2))
+    chosen = np.empty((total, n_joints), dtype=np.int64)
+    found = 0
+    counts = np.zeros(n_joints, dtype=np.int64)
+    for start in range(bounds.shape[0] - 1):
+        lo, hi = bounds[start], bounds[start + 1]
+        first_window = found
+        counts[:] = 0
+        present = 0
+        right = lo
+        for left in range(lo, hi):
+            while present < n_joints and right < hi:
+                joint = joints[order[right]]
+                if counts[joint] == 0:
+                    present += 1
+                counts[joint] += 1
+                right += 1
+            if present < n_joints:
+                break
+            first, last = positions[order[left]], positions[order[right - 1]]
+            fresh = found == first_window or not (windows[found - 1, 0] == first
+                                                  and windows[found - 1, 1] == last)
+            if fresh and first < lap:  # equal windows come one after another
+                owners[found] = start
+                windows[found, 0] = first
+                windows[found, 1] = last
+                found += 1
+            joint = joints[order[left]]
+            counts[joint] -= 1
+            if counts[joint] == 0:
+                present -= 1
+        mine = windows[first_window:found].copy()
+        shortest = np.argsort(mine[:, 1] - mine[:, 0], kind='mergesort')
+        windows[first_window:found] = mine[shortest]
+        for w in range(first_window, found):
+            middle = 0.5 * (windows[w, 0] + windows[w, 1])
+            chosen[w, :] = -1
+            for k in range(lo, hi):
+                hit = order[k]
+                p = positions[hit]
+                if windows[w, 0] <= p <= windows[w, 1]:
+                    joint = joints[hit]
+                    best = chosen[w, joint]
+                    if best < 0 or abs(p - middle) < abs(positions[best] - middle):
+                        chosen[w, joint] = hit
+    return owners[:found], windows[:found], chosen[:found]
 
 
 def choose_hits(hits: list[list[FailurePlaneHit]], window: tuple[float, float],

@@ -22,7 +22,6 @@ from .angles import wrap_configuration
 from .collision import CollisionChecker
 from .errors import InputError
 from .failure_planes import (
-    FailurePlaneHit,
     chord_crossings,
     failure_plane_hits,
     goal_free_arcs,
@@ -32,9 +31,7 @@ from .failure_surface import (
     FailureSurface,
     build_failure_surface,
     choose_hits,
-    hit_positions,
     lift_goal_arc,
-    nearest_hits,
     smallest_windows,
 )
 from .manifolds import (
@@ -326,28 +323,20 @@ class SurfaceSearch:
         proposals, fans = [], []
         for a, points in enumerate(arc_points):
             members = np.flatnonzero(single_arc[a])
-            hits: list[list[list[FailurePlaneHit]]] = [[[] for _ in self.joints]
-                                                       for _ in members]
-            for k, i in enumerate(self.joints):
-                which, positions, thetas = chord_crossings(self.robot, candidates[members],
-                                                           points, i)
-                for slot, position, theta in zip(which, positions, thetas, strict=True):
-                    hits[slot][k].append(FailurePlaneHit(i, theta, float(position)))
-            windows, owners = [], []
-            for slot in range(len(members)):
-                mine = [w for w in smallest_windows(hits[slot]) if w[0] < arc_laps[a]]
-                windows += mine
-                owners += [slot] * len(mine)
-            if not windows:
-                continue
-            chosen = nearest_hits(hit_positions(hits), windows, owners)
-            for slot, window, row in zip(owners, windows, chosen, strict=True):
-                fans.append([joint_hits[k].theta for joint_hits, k in zip(hits[slot], row,
-                                                                          strict=True)])
-                proposals.append((int(members[slot]), a, window))
-        if not fans:
+            crossings = [chord_crossings(self.robot, candidates[members], points, i)
+                         for i in self.joints]
+            owners, windows, chosen = smallest_windows(
+                np.concatenate([which for which, _, _ in crossings]),
+                np.concatenate([np.full(len(which), k) for k, (which, _, _) in
+                                enumerate(crossings)]),
+                np.concatenate([positions for _, positions, _ in crossings]),
+                len(members), len(self.joints), arc_laps[a])
+            fans.append(np.concatenate([thetas for _, _, thetas in crossings])[chosen])
+            proposals += [(int(members[slot]), a, (float(first), float(last)))
+                          for slot, (first, last) in zip(owners, windows, strict=True)]
+        if not proposals:
             return []
-        fans = _coarse_fans(candidates, arc_points, proposals, np.array(fans), self.joints,
+        fans = _coarse_fans(candidates, arc_points, proposals, np.concatenate(fans), self.joints,
                             self.robot.periodic, self.options.coarse_waypoints)
         clearance = self.checker.min_clearance(fans.reshape(-1, fans.shape[-1]),
                                                self.margin + _RANKING_CLEARANCE,
