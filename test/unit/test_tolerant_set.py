@@ -26,7 +26,7 @@ from ftplan_ros.core.cell_classes import (
     supports,
     triangle_free,
 )
-from ftplan_ros.core.components import components, layer_components
+from ftplan_ros.core.components import components, layer_components, overlap
 from ftplan_ros.core.distance_kernels import planar_link_clearances
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.robot import PlanarChain
@@ -422,6 +422,17 @@ def test_label_components_reads_whole_words_of_cells_as_cell_by_cell():
             a, b = labels[mask], union_find_labels(mask, structure, periodic)[mask]
             assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]), \
                 (trial, joint)
+
+
+def test_overlap_is_whether_two_masks_share_a_cell():
+    rng = np.random.default_rng(15)
+    for _ in range(50):
+        shape = tuple(int(v) for v in rng.integers(1, 9, 3))
+        a, b = (rng.random(shape) < rng.uniform(0.0, 0.2) for _ in range(2))
+        assert overlap(a, b) == bool((a & b).any())
+        assert overlap(a, a) == bool(a.any())
+    with pytest.raises(ValueError, match='shapes'):
+        overlap(np.ones((2, 2, 2), bool), np.ones((2, 2, 3), bool))
 
 
 # G from both sides ----------------------------------------------------------------------

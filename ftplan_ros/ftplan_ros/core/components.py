@@ -122,6 +122,22 @@ def layer_components(mask: np.ndarray, joint: int, periodic: np.ndarray) -> Comp
     return components(mask, periodic, tuple(a for a in range(3) if a != joint))
 
 
+def overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two bool masks of one shape share a cell; stops at the first shared one."""
+    if a.shape != b.shape:
+        raise ValueError(f'masks of shapes {a.shape} and {b.shape} cannot overlap')
+    return bool(_overlap(np.ascontiguousarray(a, dtype=np.bool_).ravel(),
+                         np.ascontiguousarray(b, dtype=np.bool_).ravel()))
+
+
+@numba.njit(cache=True)
+def _overlap(a, b):
+    for k in range(a.shape[0]):
+        if a[k] and b[k]:
+            return True
+    return False
+
+
 @numba.njit(cache=True)
 def _line_base(line, sizes, strides, axes):
     """Flat index of the first cell of line `line`."""

@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .cell_classes import CellClasses, JointLattice, classify_cells, supports
-from .components import layer_components
+from .components import layer_components, overlap
 from .errors import InputError
 from .robot import PlanarChain
 from .scene import Scene
@@ -190,11 +190,14 @@ class TolerantSet:
         that may put the tool within the goal tolerance (`escape_liberal`).
         """
         if joint not in self._liberal_escapes:
-            classes = self.classes
-            found = layer_components(classes.possible, joint, self.lattice.periodic)
-            self._liberal_escapes[joint] = found.cells(found.holding(self.near_goal
-                                                                     & classes.possible))
+            found = layer_components(self.classes.possible, joint, self.lattice.periodic)
+            self._liberal_escapes[joint] = found.cells(found.holding(self._possible_goal))
         return self._liberal_escapes[joint]
+
+    @cached_property
+    def _possible_goal(self) -> np.ndarray:
+        """(N, N, N) bool: cells that may be free and may put the tool at the goal."""
+        return self.near_goal & self.classes.possible
 
     @cached_property
     def liberal_all(self) -> np.ndarray:
@@ -209,7 +212,7 @@ class TolerantSet:
         out = self.classes.possible.copy()
         for joint in self.joints:
             out &= self.liberal_escape(joint)
-            if not all((out & mask).any() for mask in masks):
+            if not all(overlap(out, mask) for mask in masks):
                 return None
         return out
 
