@@ -35,8 +35,11 @@ from .web_search import PAPER_METHOD, WebSearch, past_the_paper, sheets_apply, w
 log = logging.getLogger(__name__)
 
 
-def check_plannable(scene: Scene) -> None:
-    """Raise InputError when the scene's task cannot be planned (the CLI's exit code 2)."""
+def check_plannable(scene: Scene, checker: CollisionChecker | None = None) -> None:
+    """Raise InputError when the scene's task cannot be planned (the CLI's exit code 2).
+
+    `checker`: the scene's, if the caller has one already.
+    """
     robot, task = scene.robot, scene.task
     if task is None:
         raise InputError('task', 'is missing: planning needs task.start and task.goal')
@@ -56,7 +59,8 @@ def check_plannable(scene: Scene) -> None:
     if _same_task_point(task):
         raise InputError('task.goal', 'equals task.start (within the goal tolerances): '
                          'nothing to plan')
-    for k, clearance in enumerate(CollisionChecker(robot, scene.obstacles).base_clearance()):
+    checker = checker or CollisionChecker(robot, scene.obstacles)
+    for k, clearance in enumerate(checker.base_clearance()):
         if not clearance > 0.0:
             raise InputError(f'obstacles[{k}]', 'covers the robot base: every configuration '
                              'collides')
@@ -84,14 +88,15 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
     report = progress or (lambda line: None)
     cache = cache or ManifoldCache(size=2)
     started = time.perf_counter()
-    check_plannable(scene)
+    checker = CollisionChecker(scene.robot, scene.obstacles)  # one for every stage
+    check_plannable(scene, checker)
     if scene.robot.n_joints - scene.robot.task_dim == 1:
-        search = SurfaceSearch(scene, options, rng, report, cache)
+        search = SurfaceSearch(scene, options, rng, report, cache, checker)
         search.prefer_starts = prefer_starts  # issue 10: reachable starts first
         result = _paper_then_sheets(search, scene, options, report, start_configuration,
                                     prefer_starts)
         if not result.feasible and start_configuration is None:
-            result = _with_coverage(scene, result, options, rng, report, cache)
+            result = _with_coverage(scene, result, options, rng, report, cache, checker)
     else:
         result = plan_on_curves(scene, options, rng, report, cache, start_configuration)
     stats = {'method': PAPER_METHOD} | dict(result.stats, plan_time_s=time.perf_counter() - started)
@@ -113,17 +118,19 @@ def _paper_then_sheets(search: SurfaceSearch, scene: Scene, options: PlannerOpti
     that no plan exists. On the 120 scenes of three bench seeds that round never planned,
     and it took up to 0.17 s of scenes that the sheets then planned.
     """
+    checker = search.checker
     if start_configuration is not None or not sheets_apply(scene, options):
         return past_the_paper(scene, search.run(start_configuration), options, report,
-                              start_configuration, prefer_starts)
+                              start_configuration, prefer_starts, checker)
     finer = (options.candidate_refinement,)
     first = search.run(subdivisions=(1,))
     if first.feasible or not first.stats['goal_free_arcs']:  # no second round, as before
-        return past_the_paper(scene, first, options, report, None, prefer_starts)
+        return past_the_paper(scene, first, options, report, None, prefer_starts, checker)
     if not first.stats.get('theta_S'):
         return past_the_paper(scene, search.run(subdivisions=finer), options, report, None,
-                              prefer_starts)
-    sheets = WebSearch(scene, options, report, None, prefer_starts).run(previous=first)
+                              prefer_starts, checker)
+    sheets = WebSearch(scene, options, report, None, prefer_starts,
+                       checker).run(previous=first)
     if sheets.feasible or sheets.stats.get('proved_infeasible'):
         return with_sheets(first, sheets)
     return with_sheets(search.run(subdivisions=finer), sheets)
@@ -131,7 +138,8 @@ def _paper_then_sheets(search: SurfaceSearch, scene: Scene, options: PlannerOpti
 
 def _with_coverage(scene: Scene, result: PlanResult, options: PlannerOptions,
                    rng: np.random.Generator, report: Callable[[str], None],
-                   cache: ManifoldCache, attempts: int = 3) -> PlanResult:
+                   cache: ManifoldCache, checker: CollisionChecker,
+                   attempts: int = 3) -> PlanResult:
     """Add to a failed result the largest set of joints a plan could still tolerate.
 
     When some joints' failure planes keep every start from the necessary condition
@@ -146,7 +154,7 @@ def _with_coverage(scene: Scene, result: PlanResult, options: PlannerOptions,
             continue
         report(f'no plan tolerates {", ".join(blocked)}: trying the other joints')
         partial = SurfaceSearch(scene.with_tolerated(others), options, rng, report,
-                                cache).run()
+                                cache, checker).run()
         if partial.feasible:
             return replace(result, stats=dict(result.stats, coverable_joints=others),
                            reason=result.reason + f'; a plan tolerates the locks of '

@@ -78,11 +78,13 @@ class SurfaceSearch:
     """Plan a scene whose robot has one degree of redundancy (see the module docstring).
 
     `scene.tolerated_joints` are the joints whose locks the surface is built for; the
-    others may block the way to the goal when they lock.
+    others may block the way to the goal when they lock. A `checker` for the scene's
+    robot and obstacles may be passed in to share it.
     """
 
     def __init__(self, scene: Scene, options: PlannerOptions, rng: np.random.Generator,
-                 report: Callable[[str], None], cache: ManifoldCache):
+                 report: Callable[[str], None], cache: ManifoldCache,
+                 checker: CollisionChecker | None = None):
         self.scene = scene
         self.robot = scene.robot
         self.task = scene.task
@@ -92,7 +94,7 @@ class SurfaceSearch:
         self.cache = cache
         self.joints = scene.tolerated_joints
         self.margin = options.verification.margin
-        self.checker = CollisionChecker(self.robot, scene.obstacles)
+        self.checker = checker or CollisionChecker(self.robot, scene.obstacles)
         self.x_s = np.asarray(self.task.start, dtype=float)
         self.x_g = np.asarray(self.task.goal, dtype=float)
 

@@ -69,12 +69,13 @@ PROVED_NONE = 'no failure-tolerant plan exists (proved on a joint grid)'
 def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
                    report: Callable[[str], None], start_configuration: np.ndarray | None = None,
                    prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None,
-                   ) -> PlanResult:
+                   checker: CollisionChecker | None = None) -> PlanResult:
     """Name the paper's result's method; where it found no plan, run the recovery sheets.
 
     The sheets run for planar 3R arms among disks when `options.methods` lists them. A
     failure says whether the grid proved that no plan exists or found none at its
-    resolution, after the paper's own reason.
+    resolution, after the paper's own reason. `checker` is the scene's, if the caller
+    has one.
     """
     result = replace(result, stats={'method': PAPER_METHOD} | result.stats)
     if result.feasible or not sheets_apply(scene, options):
@@ -84,7 +85,7 @@ def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
         # quarter step apart along M_s: no plan has room to start (not a proof).
         return result
     return with_sheets(result, WebSearch(scene, options, report, start_configuration,
-                                         prefer_starts).run(previous=result))
+                                         prefer_starts, checker).run(previous=result))
 
 
 def with_sheets(paper: PlanResult, sheets: PlanResult) -> PlanResult:
@@ -116,12 +117,14 @@ class WebSearch:
     """Plan a planar 3R scene by recovery sheets over G (see the module docstring).
 
     `prefer_starts` maps start configurations (c, 3) to a mask (c,) of those to try
-    first (as `planner.plan` takes it).
+    first (as `planner.plan` takes it). A `checker` of the scene may be shared with the
+    paper's search (its count of clearance queries then covers both).
     """
 
     def __init__(self, scene: Scene, options: PlannerOptions, report: Callable[[str], None],
                  start_configuration: np.ndarray | None = None,
-                 prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None):
+                 prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None,
+                 checker: CollisionChecker | None = None):
         self.scene = scene
         self.options = options
         self.report = report
@@ -132,7 +135,7 @@ class WebSearch:
         self.start_configuration = start_configuration
         self.prefer_starts = prefer_starts
         self.margin = options.verification.margin
-        self.checker = CollisionChecker(scene.robot, scene.obstacles)
+        self.checker = checker or CollisionChecker(scene.robot, scene.obstacles)
 
     def run(self, previous: PlanResult | None = None) -> PlanResult:
         """Try each grid in turn; the result keeps `previous`'s manifolds for the figures."""
