@@ -201,6 +201,7 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
     spheres = centres.shape[0]
     may_reach2 = np.empty(spheres)     # [m^2] the disk's radius squared, grown by the drift
     surely_reach2 = np.empty(spheres)  # [m^2] shrunk by it; NaN when the drift exceeds it
+    beyond2 = np.empty(spheres)        # [m^2] a wrist farther than this misses the disk
     for i in range(cells):
         theta[0] = lower[0] + (i + 0.5) * step[0]
         first = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 0, points)
@@ -212,6 +213,9 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
             off_plane2 = centres[p, 2] * centres[p, 2]
             may_reach2[p] = (reach + drift) ** 2 - off_plane2
             surely_reach2[p] = (reach - drift) ** 2 - off_plane2 if reach > drift else np.nan
+            # (_arc_half_width's `distance > length + reach`, with room for rounding)
+            beyond2[p] = (lengths[2] + np.sqrt(may_reach2[p])) ** 2 * (1.0 + 1e-12) \
+                if may_reach2[p] >= 0.0 else -1.0
         for j in range(cells):
             theta[1] = lower[1] + (j + 0.5) * step[1]
             second = _link_status(lengths, link_radius, centres, radii, arms, theta, half, 1,
@@ -221,12 +225,17 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
             base = theta[0] + theta[1] + lower[2]
             may_hit[:] = 0
             surely_hit[:] = 0
+            marked = False
             for p in range(spheres):
                 dx, dy = centres[p, 0] - points[2, 0], centres[p, 1] - points[2, 1]
-                distance = np.sqrt(dx * dx + dy * dy)
+                distance2 = dx * dx + dy * dy
+                if distance2 > beyond2[p]:
+                    continue
+                distance = np.sqrt(distance2)
                 width = _arc_half_width(distance, lengths[2], may_reach2[p])
                 if width < 0.0:
                     continue
+                marked = True
                 toward = np.arctan2(dy, dx)
                 _mark_cells(may_hit, toward, width + half[2] + _ANGLE_ROUNDING, base, step[2])
                 if np.isnan(surely_reach2[p]):
@@ -237,8 +246,12 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
                 elif width - half[2] - _ANGLE_ROUNDING >= 0.0:
                     _mark_cells(surely_hit, toward, width - half[2] - _ANGLE_ROUNDING, base,
                                 step[2])
-            near, inside = 0, 0
             free = first == 1 and second == 1
+            if not marked:  # no disk within reach of link 3 anywhere in the row
+                possible[i, j, :] = True
+                certified[i, j, :] = free
+                continue
+            near, inside = 0, 0
             for k in range(cells):
                 near += may_hit[k]
                 inside += surely_hit[k]
