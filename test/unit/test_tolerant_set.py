@@ -425,12 +425,19 @@ def test_label_components_reads_whole_words_of_cells_as_cell_by_cell():
 
 
 def test_overlap_is_whether_two_masks_share_a_cell():
+    """Random masks, and disjoint ones but for one cell, in sizes read eight cells at a time."""
     rng = np.random.default_rng(15)
-    for _ in range(50):
-        shape = tuple(int(v) for v in rng.integers(1, 9, 3))
+    for trial in range(100):
+        shape = tuple(int(v) for v in rng.integers(1, 9, 3)) if trial % 2 else (8, 4, 2)
         a, b = (rng.random(shape) < rng.uniform(0.0, 0.2) for _ in range(2))
         assert overlap(a, b) == bool((a & b).any())
         assert overlap(a, a) == bool(a.any())
+        a = rng.random(shape) < 0.5
+        b = ~a
+        assert not overlap(a, b)
+        shared = tuple(int(rng.integers(0, v)) for v in shape)
+        a[shared] = b[shared] = True
+        assert overlap(a, b)
     with pytest.raises(ValueError, match='shapes'):
         overlap(np.ones((2, 2, 2), bool), np.ones((2, 2, 3), bool))
 
