@@ -327,13 +327,14 @@ def _tool_near(lengths, lower, step, cells, x, reach):
     cos_c, sin_c = np.cos(c), np.sin(c)
     for i in range(cells):
         a = lower[0] + (i + 0.5) * step[0]
+        elbow_x, elbow_y = lengths[0] * np.cos(a), lengths[0] * np.sin(a)
         for j in range(cells):
             b = a + lower[1] + (j + 0.5) * step[1]
-            px = lengths[0] * np.cos(a) + lengths[1] * np.cos(b) - x[0]
-            py = lengths[0] * np.sin(a) + lengths[1] * np.sin(b) - x[1]
+            cos_b, sin_b = np.cos(b), np.sin(b)
+            px = elbow_x + lengths[1] * cos_b - x[0]
+            py = elbow_y + lengths[1] * sin_b - x[1]
             if abs(np.sqrt(px * px + py * py) - lengths[2]) > reach + _FAR_BEYOND_ROUNDING:
                 continue  # the wrist is too near or too far for the last link to reach
-            cos_b, sin_b = np.cos(b), np.sin(b)
             for k in range(cells):
                 dx = px + lengths[2] * (cos_b * cos_c[k] - sin_b * sin_c[k])
                 dy = py + lengths[2] * (sin_b * cos_c[k] + cos_b * sin_c[k])
