@@ -153,6 +153,8 @@ def test_stopping_at_the_first_joints_never_changes_an_answer():
             grid = tolerant_set(scene.with_tolerated([f'joint{j + 1}' for j in order]), 64)
             lattice, task = grid.lattice, grid.scene.task
             start = lattice.tool_near(grid.scene.robot, np.asarray(task.start, dtype=float))
+            assert np.array_equal(grid.liberal_all, np.logical_and.reduce(
+                [grid.classes.possible] + [grid.liberal_escape(j) for j in order]))
             found = components(grid.liberal_all, lattice.periodic)
             shared = found.holding(start) & found.holding(grid.near_goal)
             assert proves_no(grid) == (not shared[1:].any())

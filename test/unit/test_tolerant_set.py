@@ -424,6 +424,22 @@ def test_label_components_reads_whole_words_of_cells_as_cell_by_cell():
                 (trial, joint)
 
 
+def test_clearing_the_other_components_keeps_the_chosen_ones_cells():
+    rng = np.random.default_rng(16)
+    for _ in range(30):
+        shape = tuple(int(v) for v in rng.integers(1, 12, 3))
+        mask = rng.random(shape) < 0.5
+        for found in (components(mask, rng.random(3) < 0.5),
+                      layer_components(mask, int(rng.integers(0, 3)), rng.random(3) < 0.5)):
+            chosen = rng.random(found.count + 1) < 0.5
+            out = mask & (rng.random(shape) < 0.7)
+            expected = out & found.cells(chosen)
+            found.clear_others(chosen, out)
+            assert np.array_equal(out, expected)
+    with pytest.raises(ValueError, match='C-contiguous'):
+        found.clear_others(chosen, np.asfortranarray(np.ones((2, 3, 4), bool)))
+
+
 def test_overlap_is_whether_two_masks_share_a_cell():
     """Random masks, and disjoint ones but for one cell, in sizes read eight cells at a time."""
     rng = np.random.default_rng(15)

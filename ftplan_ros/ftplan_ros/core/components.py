@@ -67,15 +67,33 @@ class Components:
             raise ValueError(f'{self.count} components need {self.count + 1} choices, got '
                              f'shape {chosen.shape}')
         out = np.zeros(self.shape, dtype=np.bool_)
-        _paint(chosen[self.number], self.first, self.starts, self.ends, self._sizes(),
-               self._strides(), self.axes, out.ravel())
+        mine = chosen[self.number]
+        _paint(mine, mine, self.first, self.starts, self.ends, self._sizes(), self._strides(),
+               self.axes, out.ravel())
         return out
+
+    def clear_others(self, chosen: np.ndarray, out: np.ndarray) -> None:
+        """Set `out` False on the cells of the components that `chosen` does not mark.
+
+        `out` has the mask's shape (bool, C-contiguous) and `chosen` is (count + 1,) bool.
+        Within the mask this is `out &= self.cells(chosen)`, without a mask of the chosen
+        cells: only the others' cells are written.
+        """
+        chosen = np.asarray(chosen, dtype=np.bool_)
+        if chosen.shape != (self.count + 1,):
+            raise ValueError(f'{self.count} components need {self.count + 1} choices, got '
+                             f'shape {chosen.shape}')
+        if out.shape != self.shape or out.dtype != np.bool_ or not out.flags.c_contiguous:
+            raise ValueError(f'out must be a C-contiguous bool array of shape {self.shape}')
+        mine = chosen[self.number]  # False on the runs to clear: the value they get
+        _paint(~mine, mine, self.first, self.starts, self.ends, self._sizes(),
+               self._strides(), self.axes, out.ravel())
 
     def labels(self) -> np.ndarray:
         """(shape) int32: each cell's component, 0 outside the mask."""
         out = np.zeros(self.shape, dtype=np.int32)
-        _paint(self.number, self.first, self.starts, self.ends, self._sizes(), self._strides(),
-               self.axes, out.ravel())
+        _paint(self.number > 0, self.number, self.first, self.starts, self.ends, self._sizes(),
+               self._strides(), self.axes, out.ravel())
         return out
 
     def _sizes(self) -> np.ndarray:
@@ -152,14 +170,14 @@ def _line_base(line, sizes, strides, axes):
 
 
 @numba.njit(cache=True)
-def _paint(values, first, starts, ends, sizes, strides, axes, out):
-    """out[cell] = values[run] for the cells of every run whose value is not zero (flat)."""
+def _paint(selected, values, first, starts, ends, sizes, strides, axes, out):
+    """out[cell] = values[run] for the cells of every run that `selected` marks (flat)."""
     step_r = strides[axes[2]]
     for line in range(first.shape[0] - 1):
         base = _line_base(line, sizes, strides, axes)
         for run in range(first[line], first[line + 1]):
-            value = values[run]
-            if value:
+            if selected[run]:
+                value = values[run]
                 for r in range(starts[run], ends[run] + 1):
                     out[base + r * step_r] = value
 

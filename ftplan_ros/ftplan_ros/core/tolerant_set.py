@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .cell_classes import CellClasses, JointLattice, classify_cells, supports
-from .components import layer_components, overlap
+from .components import Components, layer_components, overlap
 from .errors import InputError
 from .robot import PlanarChain
 from .scene import Scene
@@ -184,14 +184,22 @@ class TolerantSet:
                                       task.goal_tolerance)
 
     def liberal_escape(self, joint: int) -> np.ndarray:
-        """(N, N, N) bool: cells that may escape with `joint` locked, computed once.
+        """(N, N, N) bool: cells that may escape with `joint` locked (components found once).
 
         A cell may escape when its layer component of possibly free cells holds a cell
         that may put the tool within the goal tolerance (`escape_liberal`).
         """
+        found, chosen = self._liberal_components(joint)
+        return found.cells(chosen)
+
+    def _liberal_components(self, joint: int) -> tuple[Components, np.ndarray]:
+        """Return the layer components of the possibly free cells and which may escape.
+
+        Found once per joint: (components, chosen (count + 1,) bool).
+        """
         if joint not in self._liberal_escapes:
             found = layer_components(self.classes.possible, joint, self.lattice.periodic)
-            self._liberal_escapes[joint] = found.cells(found.holding(self._possible_goal))
+            self._liberal_escapes[joint] = found, found.holding(self._possible_goal)
         return self._liberal_escapes[joint]
 
     @cached_property
@@ -211,7 +219,10 @@ class TolerantSet:
         """
         out = self.classes.possible.copy()
         for joint in self.joints:
-            out &= self.liberal_escape(joint)
+            # out &= liberal_escape(joint): out lies within the possibly free cells, which
+            # these components cover, so clearing the other components' cells does it.
+            found, chosen = self._liberal_components(joint)
+            found.clear_others(chosen, out)
             if not all(overlap(out, mask) for mask in masks):
                 return None
         return out
