@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 from ftplan_testing import SCENES, paper_scene
 
-from ftplan_ros.core import CollisionChecker, InputError, load_scene, plan, recover
+from ftplan_ros.core import (
+    CollisionChecker,
+    InputError,
+    load_scene,
+    locate_on_nominal_path,
+    plan,
+    recover,
+)
+from ftplan_ros.core.failure_surface import FailureSurface
 from ftplan_ros.core.paths import densify
 
 
@@ -110,3 +118,13 @@ def test_bad_locks_are_rejected(plans):
     paths[-1, -1, 2] = np.inf
     with pytest.raises(InputError, match='surface: has a point that is not finite'):
         recover(replace(result.surface, paths=paths), theta, 0)
+
+
+def test_a_repeated_waypoint_on_the_lock_level_gives_the_lock_point_itself():
+    """A zero-length nominal segment is projected onto, never cut (0/0 gave NaN points)."""
+    nominal = np.array([[0.0, 0.0, 0.0], [0.5, 0.2, 0.1], [0.5, 0.2, 0.1], [1.0, 0.4, 0.2]])
+    surface = FailureSurface(np.stack([nominal, nominal + [0.0, 0.0, 0.3]]), 0, (), (0,))
+    for theta in (nominal[1], nominal[1] + [0.0, 1e-8, 0.0]):
+        segment, point = locate_on_nominal_path(surface, theta, 0)
+        assert segment in (0, 1, 2) and np.all(np.isfinite(point))
+        assert np.linalg.norm(point - theta) <= 1e-6 and point[0] == theta[0]

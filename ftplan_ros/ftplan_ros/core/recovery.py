@@ -53,34 +53,62 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
     it must lie within `max_offset` [rad] of θ, or θ is not on the nominal path. A locked
     value up to `max_offset` past either end of the path's range counts as that end.
     """
-    path = surface.nominal_path
-    level = float(np.clip(theta[joint], path[:, joint].min(), path[:, joint].max()))
-    if abs(level - theta[joint]) > max_offset:
-        level = theta[joint]  # out of range: reported below
-    a, b = path[:-1], path[1:]
-    reaches = (np.minimum(a[:, joint], b[:, joint]) <= level) & \
-        (level <= np.maximum(a[:, joint], b[:, joint]))
-    if not reaches.any():
+    path = np.ascontiguousarray(surface.nominal_path, dtype=float)
+    theta = np.ascontiguousarray(theta, dtype=float)
+    segment, point, gap = _nearest_at_level(path, theta, joint, float(max_offset))
+    if segment < 0:
         raise InputError('theta', 'the lock configuration is not on the nominal path '
                          f'(joint {joint + 1} is out of its range)')
-    a, b, segments = a[reaches], b[reaches], np.flatnonzero(reaches)
-    rise = b[:, joint] - a[:, joint]
-    direction = b - a
-    along = np.einsum('sn,sn->s', theta - a, direction) / np.maximum(
-        np.einsum('sn,sn->s', direction, direction), 1e-300)
-    # A segment along which the joint moves is cut at the level; one along which it hardly
-    # moves is projected onto (cutting it would divide rounding errors by a tiny rise).
-    steep = np.abs(rise) >= 1e-3 * np.linalg.norm(direction, axis=1)
-    t = np.where(steep, (level - a[:, joint]) / np.where(steep, rise, 1.0),
-                 np.clip(along, 0.0, 1.0))
-    points = a + t[:, None] * direction
-    points[:, joint] = level
-    gaps = np.linalg.norm(points - theta, axis=1)
-    best = int(np.argmin(gaps))
-    if gaps[best] > max_offset:
+    if gap > max_offset:
         raise InputError('theta', 'the lock configuration is not on the nominal path '
-                         f'({gaps[best]:.3g} rad away)')
-    return int(segments[best]), points[best]
+                         f'({gap:.3g} rad away)')
+    return segment, point
+
+
+@numba.njit(cache=True)
+def _nearest_at_level(path, theta, joint, max_offset):
+    """`locate_on_nominal_path` on the path (W+1, n): (segment or -1, point (n,), its gap).
+
+    -1 when no segment reaches the level; the gap [rad] is the point's distance from θ.
+    """
+    low, high = path[0, joint], path[0, joint]
+    for w in range(1, path.shape[0]):
+        low, high = min(low, path[w, joint]), max(high, path[w, joint])
+    level = min(max(theta[joint], low), high)
+    if abs(level - theta[joint]) > max_offset:
+        level = theta[joint]  # out of range: no segment reaches it
+    n = path.shape[1]
+    best, best_gap = -1, np.inf
+    best_point = np.empty(n)
+    point = np.empty(n)
+    for w in range(path.shape[0] - 1):
+        a, b = path[w], path[w + 1]
+        if not (min(a[joint], b[joint]) <= level <= max(a[joint], b[joint])):
+            continue
+        rise = b[joint] - a[joint]
+        along, square = 0.0, 0.0
+        for k in range(n):
+            step = b[k] - a[k]
+            along += (theta[k] - a[k]) * step
+            square += step * step
+        # A segment along which the joint moves is cut at the level; one along which it
+        # hardly moves (or a repeated point) is projected onto: cutting it would divide
+        # rounding errors by a tiny rise.
+        if rise != 0.0 and abs(rise) >= 1e-3 * np.sqrt(square):
+            t = (level - a[joint]) / rise
+        else:
+            t = min(max(along / max(square, 1e-300), 0.0), 1.0)
+        for k in range(n):
+            point[k] = a[k] + t * (b[k] - a[k])
+        point[joint] = level
+        gap2 = 0.0
+        for k in range(n):
+            gap2 += (point[k] - theta[k]) ** 2
+        gap = np.sqrt(gap2)
+        if gap < best_gap or best < 0:
+            best, best_gap = w, gap
+            best_point[:] = point
+    return best, best_point, best_gap
 
 
 def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
