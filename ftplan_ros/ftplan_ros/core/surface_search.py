@@ -74,6 +74,25 @@ class _Proposal:
     window: tuple[float, float]
 
 
+@dataclass(frozen=True, eq=False)
+class _Ranking:
+    """Proposals as arrays, best first.
+
+    Scores (P,) [m] (as `_Proposal.score`), candidates (P,), arcs (P,), windows (P, 2).
+    """
+
+    scores: np.ndarray
+    candidates: np.ndarray
+    arcs: np.ndarray
+    windows: np.ndarray
+
+    def best(self, count: int) -> list[_Proposal]:
+        """Return the first `count` proposals."""
+        return [_Proposal(float(self.scores[k]), int(self.candidates[k]), int(self.arcs[k]),
+                          (float(self.windows[k, 0]), float(self.windows[k, 1])))
+                for k in range(min(count, len(self.scores)))]
+
+
 class SurfaceSearch:
     """Plan a scene whose robot has one degree of redundancy (see the module docstring).
 
@@ -195,21 +214,21 @@ class SurfaceSearch:
         # Steps 4-6: failure surfaces, ranked by the clearance at their vertices.
         self.report(f'{len(theta_S)} start configurations pass the necessary condition; '
                     'building failure surfaces')
-        proposals = self._rank_proposals(candidates, arc_points, arc_laps, single_arc)
-        proposed = candidates[sorted({p.candidate for p in proposals})]
-        stats['surfaces_proposed'] = len(proposals)
-        if not proposals:
+        ranking = self._rank_proposals(candidates, arc_points, arc_laps, single_arc)
+        proposed = candidates[np.unique(ranking.candidates)]
+        stats['surfaces_proposed'] = len(ranking.scores)
+        if not len(ranking.scores):
             return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
                            'at one of its vertices', stats, theta_S, proposed)
-        return self._verify_best(candidates, arc_points, proposals, stats, theta_S, proposed)
+        return self._verify_best(candidates, arc_points, ranking, stats, theta_S, proposed)
 
     def _verify_best(self, candidates: np.ndarray, arc_points: list[np.ndarray],
-                     proposals: list[_Proposal], stats: dict, theta_S: np.ndarray,
+                     ranking: _Ranking, stats: dict, theta_S: np.ndarray,
                      proposed: np.ndarray) -> _Search:
         """Self-check, best-ranked first: the first surface that passes wins."""
         last_reason = 'every fine web hits an obstacle at a vertex'
         tried = 0
-        ranked = proposals[:self.options.max_verifications]
+        ranked = ranking.best(self.options.max_verifications)
         for rank, proposal in enumerate(ranked, start=1):
             surface = self._fine_surface(candidates[proposal.candidate],
                                          arc_points[proposal.arc], proposal.window)
@@ -315,38 +334,40 @@ class SurfaceSearch:
         return wrap_configuration(np.vstack(points), self.robot.periodic)
 
     def _rank_proposals(self, candidates: np.ndarray, arc_points: list[np.ndarray],
-                        arc_laps: list[int], single_arc: np.ndarray) -> list[_Proposal]:
+                        arc_laps: list[int], single_arc: np.ndarray) -> _Ranking:
         """Score a coarse failure surface for each (θ_s, arc) passing eq. 6; best first.
 
         A coarse surface is the fan of straight paths from θ_s to its chord crossings (one
         per tolerated joint) and to a few points spread over the window, all scored in one
         clearance batch: a cheap screen, never a guarantee.
         """
-        proposals, fans = [], []
+        owners, arcs, windows, fans = [], [], [], []
         for a, points in enumerate(arc_points):
             members = np.flatnonzero(single_arc[a])
             crossings = [chord_crossings(self.robot, candidates[members], points, i)
                          for i in self.joints]
-            owners, windows, chosen = smallest_windows(
+            slots, spans, chosen = smallest_windows(
                 np.concatenate([which for which, _, _ in crossings]),
                 np.concatenate([np.full(len(which), k) for k, (which, _, _) in
                                 enumerate(crossings)]),
                 np.concatenate([positions for _, positions, _ in crossings]),
                 len(members), len(self.joints), arc_laps[a])
             fans.append(np.concatenate([thetas for _, _, thetas in crossings])[chosen])
-            proposals += [(int(members[slot]), a, (float(first), float(last)))
-                          for slot, (first, last) in zip(owners, windows, strict=True)]
-        if not proposals:
-            return []
-        fans = _coarse_fans(candidates, arc_points, proposals, np.concatenate(fans), self.joints,
-                            self.robot.periodic, self.options.coarse_waypoints)
+            owners.append(members[slots])
+            arcs.append(np.full(len(slots), a))
+            windows.append(spans)
+        owners, arcs, windows = (np.concatenate(v) if v else np.zeros(0, dtype=np.int64)
+                                 for v in (owners, arcs, windows))
+        if not len(owners):
+            return _Ranking(np.zeros(0), owners, arcs, np.zeros((0, 2)))
+        fans = _coarse_fans(candidates, arc_points, owners, arcs, windows, np.concatenate(fans),
+                            self.joints, self.robot.periodic, self.options.coarse_waypoints)
         clearance = self.checker.min_clearance(fans.reshape(-1, fans.shape[-1]),
                                                self.margin + _RANKING_CLEARANCE,
                                                refine=False).reshape(len(fans), -1).min(axis=1)
-        scored = [_Proposal(float(score), *proposal)
-                  for score, proposal in zip(clearance, proposals, strict=True)
-                  if score > self.margin]
-        return sorted(scored, key=lambda p: -p.score)
+        kept = np.flatnonzero(clearance > self.margin)
+        kept = kept[np.argsort(-clearance[kept], kind='stable')]  # best first, ties in order
+        return _Ranking(clearance[kept], owners[kept], arcs[kept], windows[kept])
 
     def _fine_surface(self, theta_s: np.ndarray, arc_points: np.ndarray,
                       window: tuple[float, float]) -> FailureSurface | None:
@@ -380,34 +401,36 @@ def _within_limits(robot, thetas: np.ndarray) -> np.ndarray:
     return np.all(inside | robot.periodic, axis=1)
 
 
-def _coarse_fans(candidates: np.ndarray, arc_points: list[np.ndarray], proposals: list,
-                 hits: np.ndarray, joints: tuple[int, ...], periodic: np.ndarray,
-                 waypoints: int) -> np.ndarray:
+def _coarse_fans(candidates: np.ndarray, arc_points: list[np.ndarray], owners: np.ndarray,
+                 arcs: np.ndarray, windows: np.ndarray, hits: np.ndarray,
+                 joints: tuple[int, ...], periodic: np.ndarray, waypoints: int) -> np.ndarray:
     """Points (P, m, n) [rad] of straight paths from each θ_s to its hits and across its window.
 
-    `proposals` are (candidate, arc, window) and `hits` (P, J, n) the chosen hit of each
-    tolerated joint; the arc and the hits are lifted as `lift_goal_arc` does.
+    Proposal p is candidate `owners[p]` on arc `arcs[p]` with its window (2,) [arc points];
+    `hits` (P, J, n) are the chosen hit of each tolerated joint. The arc and the hits are
+    lifted as `lift_goal_arc` does.
     """
-    theta_s = candidates[[c for c, _, _ in proposals]]  # (P, n)
+    theta_s = candidates[owners]  # (P, n)
+    count = len(owners)
     joints = np.asarray(joints)
-    rows = np.arange(len(proposals))[:, None]
+    rows = np.arange(count)[:, None]
     shift = np.zeros_like(theta_s)
     turns = 2.0 * np.pi * np.round((theta_s[:, joints] - hits[rows, np.arange(len(joints)),
                                                              joints]) / (2.0 * np.pi))
     shift[:, joints] = np.where(periodic[joints], turns, 0.0)
     lifted = hits + shift[:, None, :]
     lifted[rows, np.arange(len(joints)), joints] = theta_s[:, joints]
-    spread = np.empty((len(proposals), 5, theta_s.shape[1]))
+    spread = np.empty((count, 5, theta_s.shape[1]))
     for a, points in enumerate(arc_points):
-        mine = np.array([p[1] == a for p in proposals])
+        mine = arcs == a
         if not mine.any():
             continue
-        windows = np.array([p[2] for p in proposals])[mine]
-        at = windows[:, :1] + np.linspace(0.0, 1.0, 5)[None, :] * (windows[:, 1:] - windows[:, :1])
+        at = windows[mine, :1] + np.linspace(0.0, 1.0, 5)[None, :] * (
+            windows[mine, 1:] - windows[mine, :1])
         k = np.minimum(at.astype(int), len(points) - 2)
         t = (at - k)[..., None]
         spread[mine] = points[k] + t * (points[k + 1] - points[k])
     goals = np.concatenate([lifted, spread + shift[:, None, :]], axis=1)  # (P, J+5, n)
     steps = np.arange(1, waypoints + 1)[None, :, None, None] / waypoints
     fans = theta_s[:, None, None, :] + steps * (goals[:, None] - theta_s[:, None, None, :])
-    return fans.reshape(len(proposals), -1, theta_s.shape[1])
+    return fans.reshape(count, -1, theta_s.shape[1])
