@@ -405,6 +405,9 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
     """
     count, n = thetas.shape
     out = np.empty((count, n))
+    if centres.shape[0] == 0:  # nothing to measure: every link is infinitely clear
+        out[:] = np.inf
+        return out
     points = np.zeros((n + 1, 2))
     for q in range(count):
         planar_joint_points(lengths, thetas[q], points)
