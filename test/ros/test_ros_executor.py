@@ -192,8 +192,31 @@ def test_the_stop_after_a_lock_is_judged_on_joint_states_sent_after_it(ros):
     """Found by the drills on a loaded machine: joint states queued from before a lock,
     where the arm had stood, made the executor recover from there, not from where joint2
     had locked; its recovery command then fought the locked joint until stall_timeout."""
+    recovery, theta_s, moved = _recovery_after_a_lock(ros, late=2, still=0)
+    assert recovery.positions[:, 1] == pytest.approx(moved[1], abs=1e-9)
+    assert abs(moved[1] - theta_s[1]) > 1e-3   # the two places differ in joint2
+
+
+def test_standing_still_right_after_a_lock_is_not_yet_the_stop(ros):
+    """Found by CI on a loaded machine: a controller that had not yet taken up the last
+    command stood still for two joint states after the lock, then moved before it took up
+    the stop. The executor recovered from where the arm had stood, and its recovery
+    command held the locked joint where it no longer was until stall_timeout."""
+    recovery, theta_s, moved = _recovery_after_a_lock(ros, late=0, still=2, settle=1.0)
+    assert recovery.positions[:, 1] == pytest.approx(moved[1], abs=1e-9)
+    assert abs(moved[1] - theta_s[1]) > 1e-3
+
+
+def _recovery_after_a_lock(ros, late: int, still: int, settle: float = 0.2):
+    """Lock joint2 early on the nominal path; return the recovery command, θ_s and the lock point.
+
+    The probe plays the arm: it stands at θ_s, then after the lock sends `late` joint
+    states stamped before the lock (at θ_s), `still` fresh ones at θ_s and then, for longer
+    than the executor's `stop_settle_time` = `settle` [s], fresh ones where the arm went on
+    and locked.
+    """
     ros.make(PlannerNode)
-    ros.make(ExecutorNode, max_joint_speed=FAST)
+    ros.make(ExecutorNode, max_joint_speed=FAST, stop_settle_time=settle)
     ros.probe.listen(JointTrajectory, '/ftplan/joint_command')
     motion = plan(ros)
     names = ('joint1', 'joint2', 'joint3')
@@ -209,11 +232,11 @@ def test_the_stop_after_a_lock_is_judged_on_joint_states_sent_after_it(ros):
     ros.probe.publish(JointState, '/ftplan/locked_joint', create_locked_joint('joint2'))
     wait_for(lambda: ros.probe.logged('ftplan_executor', 'joint2 locked at about'))
     moved = point_at_fraction(motion.trajectory, 0.02)   # where the arm went on and locked
-    for stamp in (stood, stood, None, None):  # two late states from before the lock, then now
-        stamp = stamp or ros.probe.get_clock().now().to_msg()
-        target = theta_s if stamp is stood else moved
-        ros.probe.publish(JointState, '/joint_states', create_joint_state(names, target,
-                                                                          stamp=stamp))
+    states = [(theta_s, stood)] * late + [(theta_s, None)] * still + \
+        [(moved, None)] * (int(settle / 0.05) + 10)
+    for target, stamp in states:
+        ros.probe.publish(JointState, '/joint_states', create_joint_state(
+            names, target, stamp=stamp or ros.probe.get_clock().now().to_msg()))
         time.sleep(0.05)
 
     def after_the_stop():
@@ -224,8 +247,7 @@ def test_the_stop_after_a_lock_is_judged_on_joint_states_sent_after_it(ros):
 
     recovery = read_joint_trajectory(wait_for(after_the_stop, what='the recovery command')[0],
                                      names)
-    assert recovery.positions[:, 1] == pytest.approx(moved[1], abs=1e-9)
-    assert abs(moved[1] - theta_s[1]) > 1e-3   # the two places differ in joint2
+    return recovery, theta_s, moved
 
 
 def test_an_execution_without_joint_states_fails_after_start_timeout(ros):

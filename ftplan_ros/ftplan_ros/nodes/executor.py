@@ -229,6 +229,10 @@ class ExecutorNode(Node):
                 'Two consecutive joint states closer than this [rad] mean the arm stands still.')
         declare(self, 'stop_timeout', 5.0,
                 'Seconds to wait for the arm to stop after a lock before failing.')
+        declare(self, 'stop_settle_time', 0.2,
+                'Seconds after a lock before the arm standing still counts as stopped: a '
+                'controller that had not yet taken up the last command may still start it '
+                'and move before it takes up the stop.')
         declare(self, 'start_timeout', 5.0,
                 'Seconds an execution waits for a joint state stamped after its request.')
         declare(self, 'joint_state_timeout', 2.0,
@@ -251,8 +255,9 @@ class ExecutorNode(Node):
                 'tolerated joints of each plan).')
         validators = {name: positive for name in (
             'max_joint_speed', 'arrival_tolerance', 'max_path_offset', 'path_tolerance',
-            'stopped_tolerance', 'stop_timeout', 'start_timeout', 'status_rate',
-            'joint_state_timeout', 'stall_timeout', 'lock_angle_tolerance', 'approach_time')}
+            'stopped_tolerance', 'stop_timeout', 'stop_settle_time', 'start_timeout',
+            'status_rate', 'joint_state_timeout', 'stall_timeout', 'lock_angle_tolerance',
+            'approach_time')}
         check_startup_parameters(self, validators)
         add_validators(self, validators)
 
@@ -722,9 +727,10 @@ class ExecutorNode(Node):
             float(self.get_parameter('stopped_tolerance').value)
 
     def _wait_for_stop(self, q: np.ndarray) -> None:
-        if not self._standing(q):
-            return
         ex = self.execution
+        if not self._standing(q) or time.monotonic() - ex.stop_requested < float(
+                self.get_parameter('stop_settle_time').value):
+            return
         self.locks.settle(q)
         if ex.lock_phase == State.APPROACHING:
             self._replan_with_joints_left(q)
