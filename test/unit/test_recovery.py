@@ -128,3 +128,19 @@ def test_a_repeated_waypoint_on_the_lock_level_gives_the_lock_point_itself():
         segment, point = locate_on_nominal_path(surface, theta, 0)
         assert segment in (0, 1, 2) and np.all(np.isfinite(point))
         assert np.linalg.norm(point - theta) <= 1e-6 and point[0] == theta[0]
+
+
+def test_locating_a_lock_checks_its_arguments_before_the_compiled_search(plans):
+    """locate_on_nominal_path is public: out-of-range joints must never reach the kernel."""
+    _, result = plans['free']
+    surface, theta = result.surface, result.nominal_path[3]
+    for joint in (3, -1, 10**20, 1.0, True):
+        with pytest.raises(InputError, match='joint: must be in 0..2'):
+            locate_on_nominal_path(surface, theta, joint)
+    for bad in (theta[:2], np.append(theta, 0.0), theta[None], np.array([np.nan, 0.0, 0.0])):
+        with pytest.raises(InputError, match='theta: must be 3 finite angles'):
+            locate_on_nominal_path(surface, bad, 0)
+    for paths in (surface.paths[:, :1], np.where(np.isnan(surface.paths), 0.0, np.nan)):
+        with pytest.raises(InputError, match='nominal path that is not two or more finite'):
+            locate_on_nominal_path(replace(surface, paths=paths), theta, 0)
+    assert locate_on_nominal_path(surface, theta, np.int64(1))[0] >= 0

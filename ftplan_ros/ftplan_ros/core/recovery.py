@@ -52,10 +52,14 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
     Among the nominal segments that reach the locked value, the point nearest θ is taken;
     it must lie within `max_offset` [rad] of θ, or θ is not on the nominal path. A locked
     value up to `max_offset` past either end of the path's range counts as that end.
+    Raises InputError for bad arguments (as `recover`) or a nominal path that is not two
+    or more finite points.
     """
+    theta = _checked_lock(surface, theta, joint, max_offset)
     path = np.ascontiguousarray(surface.nominal_path, dtype=float)
-    theta = np.ascontiguousarray(theta, dtype=float)
-    segment, point, gap = _nearest_at_level(path, theta, joint, float(max_offset))
+    if len(path) < 2 or not np.all(np.isfinite(path)):
+        raise InputError('surface', 'has a nominal path that is not two or more finite points')
+    segment, point, gap = _nearest_at_level(path, theta, int(joint), float(max_offset))
     if segment < 0:
         raise InputError('theta', 'the lock configuration is not on the nominal path '
                          f'(joint {joint + 1} is out of its range)')
@@ -63,6 +67,21 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
         raise InputError('theta', 'the lock configuration is not on the nominal path '
                          f'({gap:.3g} rad away)')
     return segment, point
+
+
+def _checked_lock(surface: FailureSurface, theta: np.ndarray, joint: int,
+                  max_offset: float) -> np.ndarray:
+    """Return θ as n finite angles (C-contiguous); raise InputError for a bad lock."""
+    n_joints = surface.paths.shape[-1]
+    if isinstance(joint, bool | np.bool_) or not isinstance(joint, int | np.integer) or \
+            not 0 <= joint < n_joints:
+        raise InputError('joint', f'must be in 0..{n_joints - 1}, got {joint!r}')
+    if not (math.isfinite(max_offset) and max_offset >= 0.0):
+        raise InputError('max_offset', f'must be a finite distance >= 0 [rad], got {max_offset}')
+    theta = np.ascontiguousarray(theta, dtype=float)
+    if theta.shape != (n_joints,) or not np.all(np.isfinite(theta)):
+        raise InputError('theta', f'must be {n_joints} finite angles')
+    return theta
 
 
 @numba.njit(cache=True)
@@ -119,15 +138,7 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     does that). Raises InputError for a joint that is not an index in range, θ off the
     path by more than `max_offset` [rad] (finite, >= 0) or a web point that is not finite.
     """
-    theta = np.asarray(theta, dtype=float)
-    n_joints = surface.paths.shape[-1]
-    if isinstance(joint, bool | np.bool_) or not isinstance(joint, int | np.integer) or \
-            not 0 <= joint < n_joints:
-        raise InputError('joint', f'must be in 0..{n_joints - 1}, got {joint!r}')
-    if not (math.isfinite(max_offset) and max_offset >= 0.0):
-        raise InputError('max_offset', f'must be a finite distance >= 0 [rad], got {max_offset}')
-    if theta.shape != (n_joints,) or not np.all(np.isfinite(theta)):
-        raise InputError('theta', f'must be {n_joints} finite angles')
+    theta = _checked_lock(surface, theta, joint, max_offset)
     if not np.all(np.isfinite(surface.paths)):
         raise InputError('surface', 'has a point that is not finite')
     segment, start = locate_on_nominal_path(surface, theta, joint, max_offset)
