@@ -36,7 +36,7 @@ STAGES = (
     ('paper: verify surfaces', 'surface_search.py', '_verify_best'),
     ('G: cell classes', 'cell_classes.py', 'classify_cells'),
     ('G: certified escapes', 'tolerant_set.py', 'certified_escape'),
-    ('G: liberal escapes', 'tolerant_set.py', 'liberal_escape'),
+    ('G: liberal escapes', 'tolerant_set.py', '_liberal_components'),
     ('  labelling (both sides)', 'components.py', 'components'),
     ('sheets: build the web', 'web_search.py', '_plan_on'),
     ('verify S_F (either method)', 'verification.py', 'verify_surface'),
