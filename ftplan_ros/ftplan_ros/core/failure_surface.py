@@ -308,51 +308,43 @@ def _sweep_windows(order, joints, positions, bounds, n_joints, lap):
         shortest = np.argsort(mine[:, 1] - mine[:, 0], kind='mergesort')
         windows[first_window:found] = mine[shortest]
         for w in range(first_window, found):
-            middle = 0.5 * (windows[w, 0] + windows[w, 1])
-            chosen[w, :] = -1
-            for k in range(lo, hi):
-                hit = order[k]
-                p = positions[hit]
-                if windows[w, 0] <= p <= windows[w, 1]:
-                    joint = joints[hit]
-                    best = chosen[w, joint]
-                    if best < 0 or abs(p - middle) < abs(positions[best] - middle):
-                        chosen[w, joint] = hit
+            _nearest_inside(order[lo:hi], joints, positions, windows[w, 0], windows[w, 1],
+                            chosen[w])
     return owners[:found], windows[:found], chosen[:found]
 
 
 def choose_hits(hits: list[list[FailurePlaneHit]], window: tuple[float, float],
                 ) -> list[FailurePlaneHit]:
-    """One hit per joint inside the window: the one nearest its middle."""
-    chosen = nearest_hits(hit_positions([hits]), [window], [0])[0]
-    return [joint_hits[k] for joint_hits, k in zip(hits, chosen, strict=True)]
+    """One hit per joint inside the window: the one nearest its middle (the first of equals).
 
-
-def hit_positions(hits: list[list[list[FailurePlaneHit]]]) -> np.ndarray:
-    """Positions (S, J, H) of the hits of each start and joint along the arc, NaN-padded."""
-    most = max((len(joint_hits) for per_start in hits for joint_hits in per_start), default=0)
-    out = np.full((len(hits), len(hits[0]) if hits else 0, most), np.nan)
-    for s, per_start in enumerate(hits):
-        for j, joint_hits in enumerate(per_start):
-            out[s, j, :len(joint_hits)] = [hit.position for hit in joint_hits]
-    return out
-
-
-def nearest_hits(positions: np.ndarray, windows: list[tuple[float, float]],
-                 starts: list[int]) -> np.ndarray:
-    """Pick `choose_hits`'s hit of each joint for many (start, window) pairs: indices (w, J).
-
-    `positions` (S, J, H) come from `hit_positions`; window k belongs to start
-    `starts[k]`. Raises ValueError when a window holds no hit of some joint.
+    Raises ValueError when the window holds no hit of some joint.
     """
-    windows = np.asarray(windows, dtype=float).reshape(-1, 2)
-    mine = positions[np.asarray(starts, dtype=np.int64)]  # (w, J, H)
-    inside = (mine >= windows[:, :1, None]) & (mine <= windows[:, 1:, None])
-    if not inside.any(axis=2).all():
+    flat = [(j, hit) for j, joint_hits in enumerate(hits) for hit in joint_hits]
+    chosen = np.empty(len(hits), dtype=np.int64)
+    _nearest_inside(np.arange(len(flat)), np.array([j for j, _ in flat], dtype=np.int64),
+                    np.array([hit.position for _, hit in flat], dtype=float),
+                    float(window[0]), float(window[1]), chosen)
+    if np.any(chosen < 0):
         raise ValueError('a window holds no hit of some joint')
-    middle = 0.5 * (windows[:, 0] + windows[:, 1])
-    # The first of equally near hits, as min() takes it.
-    return np.argmin(np.where(inside, np.abs(mine - middle[:, None, None]), np.inf), axis=2)
+    return [flat[k][1] for k in chosen]
+
+
+@numba.njit(cache=True)
+def _nearest_inside(hits, joints, positions, first, last, out):
+    """out[j] = the hit of joint j inside [first, last] nearest its middle, else -1.
+
+    `hits` are indices into `joints` and `positions` [arc points], taken in their order:
+    of equally near hits the first wins.
+    """
+    middle = 0.5 * (first + last)
+    out[:] = -1
+    for hit in hits:
+        p = positions[hit]
+        if first <= p <= last:
+            joint = joints[hit]
+            best = out[joint]
+            if best < 0 or abs(p - middle) < abs(positions[best] - middle):
+                out[joint] = hit
 
 
 def _thin(points: np.ndarray, indices: np.ndarray, spacing: float) -> np.ndarray:

@@ -11,8 +11,8 @@ import numpy as np
 
 from .collision import CollisionChecker
 from .curves import FrozenJoints
-from .failure_planes import crossing_segments
-from .failure_surface import FailureSurface, smallest_windows
+from .failure_planes import FailurePlaneHit, crossing_segments
+from .failure_surface import FailureSurface, choose_hits, smallest_windows
 from .manifolds import ManifoldOptions, trace_self_motion_manifolds
 from .recovery import recover
 from .robot import PlanarChain, Robot, task_errors, task_residuals
@@ -45,6 +45,7 @@ def load_kernels(robot: Robot) -> None:
         certify_simplices(checker, corners, 0.0, 1)
     crossing_segments(np.array([0.0, 1.0]), np.array([0.5]), periodic=True)
     smallest_windows(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1), 1, 1)
+    choose_hits([[FailurePlaneHit(0, theta, 0.0)]], (0.0, 0.0))
     fan = np.stack([np.stack([theta, theta + 0.1]), np.stack([theta, theta + 0.2])])
     recover(FailureSurface(fan, 0, (), ()), theta + 0.05, 0)
     if isinstance(robot, PlanarChain) and robot.n_joints == 3:
