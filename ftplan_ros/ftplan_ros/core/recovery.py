@@ -55,7 +55,13 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
     Raises InputError for bad arguments (as `recover`) or a nominal path that is not two
     or more finite points.
     """
-    theta = _checked_lock(surface, theta, joint, max_offset)
+    return _locate(surface, _checked_lock(surface, theta, joint, max_offset), joint,
+                   max_offset)
+
+
+def _locate(surface: FailureSurface, theta: np.ndarray, joint: int,
+            max_offset: float) -> tuple[int, np.ndarray]:
+    """`locate_on_nominal_path` for a lock `_checked_lock` has passed."""
     path = np.ascontiguousarray(surface.nominal_path, dtype=float)
     if len(path) < 2 or not np.all(np.isfinite(path)):
         raise InputError('surface', 'has a nominal path that is not two or more finite points')
@@ -141,7 +147,7 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     theta = _checked_lock(surface, theta, joint, max_offset)
     if not np.all(np.isfinite(surface.paths)):
         raise InputError('surface', 'has a point that is not finite')
-    segment, start = locate_on_nominal_path(surface, theta, joint, max_offset)
+    segment, start = _locate(surface, theta, joint, max_offset)
     # S_F is sliced at the locked value moved into the path's range (by at most max_offset).
     slice_level = float(start[joint])
     point_of, segment_of = surface.vertex_ids, surface.edge_ids
