@@ -62,12 +62,8 @@ class Components:
 
     def cells(self, chosen: np.ndarray) -> np.ndarray:
         """(shape) bool: the cells of the components `chosen` (count + 1,) bool marks."""
-        chosen = np.asarray(chosen, dtype=np.bool_)
-        if chosen.shape != (self.count + 1,):
-            raise ValueError(f'{self.count} components need {self.count + 1} choices, got '
-                             f'shape {chosen.shape}')
+        mine = self._chosen_runs(chosen)
         out = np.zeros(self.shape, dtype=np.bool_)
-        mine = chosen[self.number]
         _paint(mine, mine, self.first, self.starts, self.ends, self._sizes(), self._strides(),
                self.axes, out.ravel())
         return out
@@ -79,15 +75,19 @@ class Components:
         Within the mask this is `out &= self.cells(chosen)`, without a mask of the chosen
         cells: only the others' cells are written.
         """
+        mine = self._chosen_runs(chosen)  # False on the runs to clear: the value they get
+        if out.shape != self.shape or out.dtype != np.bool_ or not out.flags.c_contiguous:
+            raise ValueError(f'out must be a C-contiguous bool array of shape {self.shape}')
+        _paint(~mine, mine, self.first, self.starts, self.ends, self._sizes(),
+               self._strides(), self.axes, out.ravel())
+
+    def _chosen_runs(self, chosen: np.ndarray) -> np.ndarray:
+        """Mark each run (runs,) bool whose component `chosen` (count + 1,) bool marks."""
         chosen = np.asarray(chosen, dtype=np.bool_)
         if chosen.shape != (self.count + 1,):
             raise ValueError(f'{self.count} components need {self.count + 1} choices, got '
                              f'shape {chosen.shape}')
-        if out.shape != self.shape or out.dtype != np.bool_ or not out.flags.c_contiguous:
-            raise ValueError(f'out must be a C-contiguous bool array of shape {self.shape}')
-        mine = chosen[self.number]  # False on the runs to clear: the value they get
-        _paint(~mine, mine, self.first, self.starts, self.ends, self._sizes(),
-               self._strides(), self.axes, out.ravel())
+        return chosen[self.number]
 
     def labels(self) -> np.ndarray:
         """(shape) int32: each cell's component, 0 outside the mask."""
