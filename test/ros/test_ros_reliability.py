@@ -42,6 +42,7 @@ from ftplan_ros.plan_client import PlanClient
 
 PLAN_STATUS = 'ftplan_planner: plan'
 NAMES = ['joint1', 'joint2', 'joint3']
+_PLANS_FOR_A_TURN = 6  # the detour test's plans at most (each ends at θ_s with p ~ 1/15)
 FIG3A = load_scene(FIG3A_FILE)
 
 
@@ -291,6 +292,13 @@ def test_an_arm_no_joint_move_frees_is_told_so_at_once_by_planner_and_executor(r
     assert np.allclose(read_joint_state(ros.probe.received('/joint_states')[-1], NAMES), pocket)
 
 
+def _approach_end(ros, stamp) -> np.ndarray:
+    """The last configuration of the approach the planner latched with the plan `stamp`."""
+    approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
+                                 if stamp_key(m.header.stamp) == stamp])[0]
+    return read_joint_trajectory(approach, NAMES).positions[-1]
+
+
 def test_the_executor_takes_the_planners_approach_that_ends_whole_turns_from_theta_s(ros):
     """On detour the planner's RRT-Connect approach ends at θ_s with joint2 a turn up. The
     executor took only an exact end, so it planned an approach of its own in every
@@ -302,11 +310,13 @@ def test_the_executor_takes_the_planners_approach_that_ends_whole_turns_from_the
     ros.probe.listen(JointTrajectory, '/ftplan/plan/approach', LATCHED_QOS)
     ros.probe.listen(JointState, '/joint_states')
     wait_for(lambda: ros.probe.received('/joint_states'))
-    motion = plan(ros)  # detour's task is fig3a's: [2, 0] -> [1, 0]
-    approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
-                                 if stamp_key(m.header.stamp) == motion.stamp])[0]
-    end = read_joint_trajectory(approach, NAMES).positions[-1]
-    turns = (end - motion.theta_s) / (2 * np.pi)
+    # RRT-Connect is random: about 1 plan in 15 ends at θ_s itself (2 of 30 in a run of
+    # the core's plan_from), which tests nothing here. Plan again until one ends turns away.
+    for _ in range(_PLANS_FOR_A_TURN):
+        motion = plan(ros)  # detour's task is fig3a's: [2, 0] -> [1, 0]
+        turns = (_approach_end(ros, motion.stamp) - motion.theta_s) / (2 * np.pi)
+        if np.any(np.round(turns)):
+            break
     assert np.allclose(turns, np.round(turns), atol=1e-9) and np.any(np.round(turns))
     done = state_of(ros, execute(ros), 'done')
     assert done.values['approach'].startswith('by the path given (')
