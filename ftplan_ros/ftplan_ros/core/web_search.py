@@ -829,22 +829,28 @@ def _bfs(mask: np.ndarray, periodic: np.ndarray, sources: np.ndarray, target: np
     return np.stack(np.unravel_index(found, mask.shape), axis=1)
 
 
+_UNSEEN = 255  # `_bfs_kernel`'s step code of a cell not reached yet
+_SOURCE = 254  # and of a source cell
+
+
 @numba.njit(cache=True)
 def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
     """Breadth-first search over flat cells; returns the flat path or an empty array.
 
     The queue is first in, first out, so the first target cell queued is the first one a
-    search that looks at the cells it takes out would reach: the search stops there.
+    search that looks at the cells it takes out would reach: the search stops there. Each
+    cell keeps the index of the step (a row of `offsets`) that reached it, one byte, and
+    the path is walked back by those steps.
     """
     total = mask.shape[0]
     dims = shape.shape[0]
-    parent = np.full(total, -2, dtype=np.int32)
+    came = np.full(total, _UNSEEN, dtype=np.uint8)
     queue = np.empty(total, dtype=np.int32)
     tail = 0
     end = -1
     for s in sources:
-        if mask[s] and parent[s] == -2:
-            parent[s] = -1
+        if mask[s] and came[s] == _UNSEEN:
+            came[s] = _SOURCE
             queue[tail] = s
             tail += 1
             if end < 0 and target[s]:
@@ -879,8 +885,8 @@ def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
                     flat = flat * shape[d] + value
                 if flat < 0:
                     continue
-            if mask[flat] and parent[flat] == -2:
-                parent[flat] = cell
+            if mask[flat] and came[flat] == _UNSEEN:
+                came[flat] = o
                 queue[tail] = flat
                 tail += 1
                 if target[flat]:
@@ -888,17 +894,35 @@ def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
                     break
     if end < 0:
         return np.empty(0, dtype=np.int64)
-    length = 0
+    length = 1
     cell = end
-    while cell >= 0:
+    while came[cell] != _SOURCE:
+        cell = _step_back(cell, offsets[came[cell]], shape, index)
         length += 1
-        cell = parent[cell]
     path = np.empty(length, dtype=np.int64)
     cell = end
     for k in range(length - 1, -1, -1):
         path[k] = cell
-        cell = parent[cell]
+        if k:
+            cell = _step_back(cell, offsets[came[cell]], shape, index)
     return path
+
+
+@numba.njit(cache=True)
+def _step_back(cell, offset, shape, index):
+    """Return the flat cell one step `offset` (d,) before `cell`, round every axis.
+
+    A step never left the grid along an axis that does not wrap, so wrapping undoes it
+    exactly. `index` (d,) is scratch space.
+    """
+    rest = cell
+    for d in range(shape.shape[0] - 1, -1, -1):
+        index[d] = rest % shape[d]
+        rest //= shape[d]
+    flat = 0
+    for d in range(shape.shape[0]):
+        flat = flat * shape[d] + (index[d] - offset[d]) % shape[d]
+    return flat
 
 
 def load_sheet_kernels() -> None:
