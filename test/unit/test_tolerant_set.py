@@ -480,6 +480,42 @@ def test_tool_near_holds_every_configuration_near_the_point(fig3a):
     assert near.mean() < 0.05
 
 
+@pytest.mark.parametrize('lengths, limited', [((1.0, 1.0, 1.0), False), ((1.2, 0.7, 0.4), True),
+                                               ((0.5, 1.0, 1.5), False)])
+def test_tool_near_holds_every_cell_where_a_sampled_tool_comes_near(lengths, limited):
+    """`tool_near` against brute force: cells sampled on a 7^3 lattice of points (corners
+    and faces included) whose tool comes within the tolerance must all be marked, and
+    every marked cell lies within the lever bound of its centre (Σ_a tip_arm[a] h_a)."""
+    rng = np.random.default_rng(31)
+    lengths = np.array(lengths)
+    robot = PlanarChain(tuple(lengths), ('a', 'b', 'c'))
+    for cells in (8, 17, 32):
+        lower = np.array([-2.0, -2.5, -3.0]) if limited else np.full(3, -np.pi)
+        upper = np.array([2.5, 2.0, 3.0]) if limited else np.full(3, np.pi)
+        lattice = JointLattice(cells, lower, (upper - lower) / cells, np.full(3, not limited))
+        half = 0.5 * lattice.step
+        index = np.stack(np.meshgrid(*(np.arange(cells),) * 3, indexing='ij'), -1).reshape(-1, 3)
+        centres = lattice.centres(index)
+        for tolerance in (0.0, 0.01, 0.3):
+            x = planar_fk(lengths, rng.uniform(-np.pi, np.pi, 3))
+            near = lattice.tool_near(robot, x, tolerance)
+            lever = robot.tip_lever_arms() @ half + tolerance + 1e-9
+            loose = np.linalg.norm(planar_fk(lengths, centres) - x, axis=1) <= lever
+            assert not (near.reshape(-1) & ~loose).any()
+            # Brute force over the loose band's cells (the others are far from x).
+            band = index[loose]
+            band = band[rng.choice(len(band), min(len(band), 400), replace=False)]
+            offsets = np.stack(np.meshgrid(*(np.linspace(-1.0, 1.0, 7),) * 3, indexing='ij'),
+                               -1).reshape(-1, 3)
+            points = lattice.centres(band)[:, None, :] + offsets[None] * half
+            closest = np.linalg.norm(planar_fk(lengths, points) - x, axis=2).min(axis=1)
+            assert near[tuple(band[closest <= tolerance].T)].all()
+        # An exact pre-image point lies in a marked cell at tolerance 0.
+        exact = preimage_samples(lengths, x, 64)
+        exact = exact[lattice.inside(exact)]
+        assert lattice.tool_near(robot, x)[tuple(lattice.cell_of(exact).T)].all()
+
+
 def test_certified_cells_escape_by_the_flood_fill_referee(fig3a):
     """A flood fill of the failure plane (over-approximating) never refutes an escape."""
     scene, grid, _ = fig3a

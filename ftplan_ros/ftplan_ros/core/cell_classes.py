@@ -320,25 +320,43 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
 
 @numba.njit(cache=True)
 def _tool_near(lengths, lower, step, cells, x, reach):
-    """(N, N, N) bool: cells whose centre puts the tool within `reach` [m] of x."""
+    """(N, N, N) bool: cells that may hold a configuration with the tool within `reach` [m] of x.
+
+    In a cell the wrist moves by at most (ℓ_1 + ℓ_2) h_1 + ℓ_2 h_2 from where it is at
+    the centre (h the half widths) and the last link's direction φ = θ_1 + θ_2 + θ_3
+    turns by at most h_1 + h_2 + h_3. So the tool may come within `reach` of x only if,
+    from the centre's wrist w, the last link at some direction of that range ends within
+    `reach` plus the wrist's motion of x: |w + ℓ_3 u(φ) - x| <= r holds for the
+    directions φ within an arc about the direction of x - w (the law of cosines), which
+    marks the θ_3 cells of the row as `_classify` marks those within reach of a disk.
+    """
     out = np.zeros((cells, cells, cells), dtype=np.bool_)
-    # The last link's angle is a + b + c: its cosine and sine by the sum formulas.
-    c = lower[2] + (np.arange(cells) + 0.5) * step[2]
-    cos_c, sin_c = np.cos(c), np.sin(c)
+    half = 0.5 * step
+    r = reach + (lengths[0] + lengths[1]) * half[0] + lengths[1] * half[1]
+    turn = half[0] + half[1] + half[2] + _ANGLE_ROUNDING
+    last = lengths[2]
+    marks = np.empty(cells + 1, dtype=np.int64)
     for i in range(cells):
         a = lower[0] + (i + 0.5) * step[0]
         elbow_x, elbow_y = lengths[0] * np.cos(a), lengths[0] * np.sin(a)
         for j in range(cells):
             b = a + lower[1] + (j + 0.5) * step[1]
-            cos_b, sin_b = np.cos(b), np.sin(b)
-            px = elbow_x + lengths[1] * cos_b - x[0]
-            py = elbow_y + lengths[1] * sin_b - x[1]
-            if abs(np.sqrt(px * px + py * py) - lengths[2]) > reach + _FAR_BEYOND_ROUNDING:
+            qx = x[0] - elbow_x - lengths[1] * np.cos(b)  # from the wrist to x
+            qy = x[1] - elbow_y - lengths[1] * np.sin(b)
+            distance = np.sqrt(qx * qx + qy * qy)
+            if abs(distance - last) > r + _FAR_BEYOND_ROUNDING:
                 continue  # the wrist is too near or too far for the last link to reach
+            if distance + last <= r or distance == 0.0:
+                width = np.pi  # every direction reaches (or x sits on the wrist)
+            else:
+                cosine = (last * last + distance * distance - r * r) / (2.0 * last * distance)
+                width = np.arccos(min(1.0, max(-1.0, cosine)))
+            marks[:] = 0
+            _mark_cells(marks, np.arctan2(qy, qx), width + turn, b + lower[2], step[2])
+            inside = 0
             for k in range(cells):
-                dx = px + lengths[2] * (cos_b * cos_c[k] - sin_b * sin_c[k])
-                dy = py + lengths[2] * (sin_b * cos_c[k] + cos_b * sin_c[k])
-                out[i, j, k] = dx * dx + dy * dy <= reach * reach
+                inside += marks[k]
+                out[i, j, k] = inside > 0
     return out
 
 
@@ -372,11 +390,10 @@ class JointLattice:
                   ) -> np.ndarray:
         """(N, N, N) bool: cells that may hold a configuration with the tool within tolerance of x.
 
-        The tool moves by at most Σ_a tip_arm[a] · h_a inside a cell (h the half widths).
+        Each cell's wrist and last link are bounded apart (`_tool_near`).
         """
-        reach = float(robot.tip_lever_arms() @ (0.5 * self.step)) + tolerance + ROUNDING
         return _tool_near(np.asarray(robot.link_lengths, dtype=float), self.lower, self.step,
-                          self.cells, np.asarray(x, dtype=float)[:2], reach)
+                          self.cells, np.asarray(x, dtype=float)[:2], tolerance + ROUNDING)
 
     def inside(self, thetas: np.ndarray) -> np.ndarray:
         """(c,) bool: configurations within the limits of the joints that have them."""
