@@ -161,10 +161,10 @@ class WebSearch:
                 reason = f'the recovery sheets failed the self-check: {verdict.reason}'
                 log.debug(reason)
                 continue
-            if proves_no(grid):
+            proof = _no_plan_proof(grid)
+            if proof:
                 stats['proved_infeasible'] = True
-                return self._result(False, f'{PROVED_NONE}, {cells}^3 cells', None, stats,
-                                    previous)
+                return self._result(False, f'{PROVED_NONE}, {proof}', None, stats, previous)
         return self._result(False, 'no failure-tolerant plan found within the resolution of '
                             f'the joint grid ({reason})', None, stats, previous)
 
@@ -201,6 +201,18 @@ class WebSearch:
                 return _assemble(gamma, sheets, grid.joints), ''
             gamma = _lengthen_end(gamma, rows - len(gamma))
         return None, 'the recovery sheets need too many waypoints'
+
+
+def _no_plan_proof(grid: TolerantSet) -> str:
+    """Prove on the grid that no plan exists; say on which cells, or '' when it cannot.
+
+    The proof is tried first on the grid's classes pooled in blocks of 2^3
+    (`CellClasses.pooled`): an eighth of the cells to label, and as sound.
+    """
+    cells = grid.lattice.cells
+    if cells % 2 == 0 and proves_no(TolerantSet(grid.scene, grid.classes.pooled(), grid.joints)):
+        return f'{cells // 2}^3 cells pooled from {cells}^3'
+    return f'{cells}^3 cells' if proves_no(grid) else ''
 
 
 # Step 2: the nominal path ---------------------------------------------------------------
@@ -934,6 +946,7 @@ def load_sheet_kernels() -> None:
                          'task': {'start': [2.0, 0.5], 'goal': [1.0, 0.5]}})
     grid = tolerant_set(scene, 32)
     proves_no(grid)  # the liberal side's kernels too
+    grid.classes.pooled()
     mask = grid.classes.certified
     _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
