@@ -28,4 +28,6 @@ class PlannerOptions:
     # recovery sheets over the failure-tolerant set on a joint grid (planar 3R arms among
     # disks; web_search.py). Leave 'recovery_sheets' out for the paper's method alone.
     methods: tuple[str, ...] = METHODS
-    sheet_cells: tuple[int, ...] = (64, 128, 256)  # recovery sheets: joint grids tried in turn
+    # Recovery sheets: joint grids classified in turn, each tried pooled to half as many
+    # cells per joint first (web_search.WebSearch.run).
+    sheet_cells: tuple[int, ...] = (128, 256)

@@ -242,11 +242,30 @@ def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
     if not supports(scene):
         raise InputError('robot', 'the joint grid handles planar 3R arms among disks only')
     classes = classify_cells(scene, cells, margin)
-    for joint in scene.tolerated_joints:
-        if sub_slab_count(scene.robot, classes.lattice.step[joint], joint,
-                          scene.task.goal_tolerance) > 62:
-            raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
+    if not _fine_enough(scene, classes.lattice):
+        raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
     return TolerantSet(scene, classes, tuple(scene.tolerated_joints))
+
+
+def pooled_tolerant_set(grid: TolerantSet) -> TolerantSet | None:
+    """G on the grid's classes pooled in blocks of 2^3 (`CellClasses.pooled`).
+
+    None when the grid has an odd number of cells per joint, or when the pooled cells
+    are too coarse for the goal tolerance.
+    """
+    if grid.lattice.cells % 2:
+        return None
+    classes = grid.classes.pooled()
+    if not _fine_enough(grid.scene, classes.lattice):
+        return None
+    return TolerantSet(grid.scene, classes, grid.joints)
+
+
+def _fine_enough(scene: Scene, lattice: JointLattice) -> bool:
+    """Whether a layer of each tolerated joint needs at most 62 sub-slabs (one bit each)."""
+    return all(sub_slab_count(scene.robot, lattice.step[joint], joint,
+                              scene.task.goal_tolerance) <= 62
+               for joint in scene.tolerated_joints)
 
 
 def certified_escape(scene: Scene, classes: CellClasses, joint: int) -> Escape:
