@@ -306,6 +306,8 @@ def _describe(scene, result) -> str:
             'starts pass eq. (6)'
     elif 'grid_cells' in stats:
         line += f', failure-tolerant set on a {stats["grid_cells"]}^3 joint grid'
+        if stats.get('classified_cells', stats['grid_cells']) != stats['grid_cells']:
+            line += f' pooled from {stats["classified_cells"]}^3'
     lines.append(line)
     return '\n'.join(lines)
 

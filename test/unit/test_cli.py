@@ -30,6 +30,14 @@ def test_plan_writes_the_contract_json(tmp_path):
     assert data['stats']['plan_time_s'] > 0
 
 
+def test_a_sheets_plan_names_its_grid():
+    """crowded_sheets_101 plans on the 128^3 classes pooled to 64^3; the summary says so."""
+    run = ftplan('plan', SCENES / 'crowded_sheets_101.yaml')
+    assert run.returncode == 0, run.stderr
+    assert 'method recovery_sheets' in run.stdout
+    assert 'failure-tolerant set on a 64^3 joint grid pooled from 128^3' in run.stdout
+
+
 def test_infeasible_plan_exits_1_with_the_reason(tmp_path):
     out = tmp_path / 'plan.json'
     run = ftplan('plan', SCENES / 'infeasible.yaml', '--json', out)
