@@ -20,7 +20,7 @@ from ftplan_ros.core.reference import (
     proves_yes,
 )
 from ftplan_ros.core.scene import Obstacle
-from ftplan_ros.core.tolerant_set import TolerantSet, preimage_samples, tolerant_set
+from ftplan_ros.core.tolerant_set import pooled_tolerant_set, preimage_samples, tolerant_set
 from ftplan_ros.core.web_search import PROVED_NONE
 from ftplan_ros.crowded import crowded_scene
 
@@ -129,7 +129,7 @@ def test_the_reference_and_the_planner_never_contradict_each_other():
         grid = tolerant_set(scene, 64)
         yes, no = proves_yes(grid), proves_no(grid)
         assert not (yes and no), name
-        assert not (yes and proves_no(TolerantSet(scene, grid.classes.pooled(), grid.joints)))
+        assert not (yes and proves_no(pooled_tolerant_set(grid)))
         result = plan(scene)
         assert not (no and result.feasible), name
         if result.stats.get('proved_infeasible'):
@@ -147,7 +147,7 @@ def test_a_no_plan_proof_on_pooled_classes_comes_before_the_finer_grid():
     scene = random_scene(rng, int(rng.integers(0, 21)))
     assert not proves_no(tolerant_set(scene, 64))
     fine = tolerant_set(scene, 128)
-    assert proves_no(TolerantSet(scene, fine.classes.pooled(), fine.joints))
+    assert proves_no(pooled_tolerant_set(fine))
     result = plan(scene)
     assert not result.feasible and result.stats['proved_infeasible']
     assert result.reason.startswith(f'{PROVED_NONE}, 64^3 cells pooled from 128^3')
