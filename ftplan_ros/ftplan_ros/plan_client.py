@@ -67,6 +67,7 @@ from .nodes.topics import (
 
 _POLL = 0.02  # [s] longest single wait of the client's executor
 _STATUS_LOG_SIZE = 500  # recent /diagnostics statuses kept
+_STATUS_WAIT = 1.0  # [s] longest wait for the planner's status of a plan once it answered
 
 
 class Outcome(Enum):
@@ -266,16 +267,18 @@ class PlanClient(Node):
             return PlannedMotion(Outcome.TIMED_OUT, f'no answer from {PLAN_SERVICE} within '
                                  f'{timeout} s', round_trip_s=round_trip)
         key = stamp_key(response.plan.header.stamp)
-        status = self.wait_for_status(self._planner_status, lambda v: v.get('stamp') == key,
-                                      1.0 if not response.plan.poses else 0.2, mark)
-        plan_time = parse_number(status.values.get('plan_time_s')) if status else float('nan')
-        info = read_plan_info(status.values) if status else None
         if not response.plan.poses:
+            status = self._plan_status(key, mark, _STATUS_WAIT)
             reason = status.message if status else \
                 'no failure-tolerant plan (the planner\'s reason did not arrive)'
             return PlannedMotion(Outcome.FAILED, reason, key, round_trip_s=round_trip,
-                                 plan_time_s=plan_time)
+                                 plan_time_s=_plan_time(status))
         gathered = self._gather_plan(key, max(0.0, deadline - time.monotonic()))
+        # The planner reports a plan once it has published the plan's topics: after them.
+        status = self._plan_status(key, mark, min(_STATUS_WAIT,
+                                                  max(0.0, deadline - time.monotonic())))
+        plan_time = _plan_time(status)
+        info = read_plan_info(status.values) if status else None
         if gathered is None:
             return PlannedMotion(Outcome.TIMED_OUT, f'plan {key} answered, but its latched '
                                  'topics did not all arrive', key, round_trip_s=round_trip,
@@ -294,6 +297,11 @@ class PlanClient(Node):
                              surface, index, round_trip, plan_time,
                              info.task_kind if info else '',
                              info.tolerated_joints if info else ())
+
+    def _plan_status(self, key: str, mark: int, timeout: float) -> DiagnosticReading | None:
+        """Wait for the planner's status of plan `key` after `mark`; None after `timeout` [s]."""
+        return self.wait_for_status(self._planner_status, lambda v: v.get('stamp') == key,
+                                    timeout, mark)
 
     def _gather_plan(self, key: str, timeout: float):
         """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in.
@@ -377,6 +385,11 @@ class PlanClient(Node):
         if response is None:
             return False, f'no answer from {service} within {timeout} s'
         return response.success, response.message
+
+
+def _plan_time(status: DiagnosticReading | None) -> float:
+    """Return the core's plan time [s] a planner status carries; NaN without one."""
+    return parse_number(status.values.get('plan_time_s')) if status else float('nan')
 
 
 def _float32_tolerance(tolerance: float) -> float:
