@@ -503,6 +503,23 @@ def test_culled_obstacles_leave_lower_bounds(name, monkeypatch, rng):
         f'cap {capped[0, 0]:.4f} m above the distance {reference.min():.4f} m'
 
 
+
+@pytest.mark.parametrize('radius', [0.05, 0.8, 2.0])
+def test_a_thick_links_radius_counts_in_its_reach_when_culling(radius, monkeypatch):
+    """A capsule reaches its radius beyond its core: an obstacle there is not culled.
+
+    The stretched arm's core ends at 3 m; the sphere's surface lies 1.4 m beyond it, past
+    `CULL_DISTANCE` from the core's reach but inside a capsule of radius 2 m.
+    """
+    arm = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=radius)
+    ball = [Obstacle('sphere', (4.5, 0.0, 0.0), radius=0.1)]
+    thetas = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, np.pi / 2]])
+    measured = CollisionChecker(arm, ball).clearance(thetas)
+    reference = uncapped(arm, ball, thetas, monkeypatch)
+    assert np.all(measured <= reference + 1e-9)
+    assert np.isclose(reference[0, 2], 1.4 - radius)
+    assert (measured[0, 2] < 0.0) == (radius > 1.4)
+
 # Self-collision, the base, channel names ------------------------------------------------
 
 def folding_arm(disabled=None):

@@ -330,11 +330,14 @@ class CollisionChecker:
         """Drop obstacles beyond the arm's reach + CULL_DISTANCE; return the kept and the cap."""
         if not len(obstacles) or not self._moving:
             return obstacles, np.inf
-        # Every moving shape a joint turns lies within its arm from the first joint's origin;
-        # the others stand still, as far from it as they are at any configuration.
+        # Every moving shape a joint turns lies within its arm from the first joint's origin
+        # (a sphere's or capsule's arm reaches its core: its radius goes on top); the others
+        # stand still, as far from it as they are at any configuration.
         frames = self.robot.link_frames(np.zeros(self.robot.n_joints))
         origin = frames[int(self.robot.joint_chain_index[0]) + 1, :3, 3]
-        reaches = self.lever_arms()[:self._moving, 0]
+        reaches = self.lever_arms()[:self._moving, 0] + np.array(
+            [item.shape.radius if item.shape.kind in ('sphere', 'capsule') else 0.0
+             for item in self._items[:self._moving]])
         for k in np.flatnonzero(~self._turns()[self._links[:self._moving], 0]):
             centre, radius = self._items[k].shape.bounding_sphere()
             pose = frames[self._links[k]] @ self._items[k].placement
