@@ -24,6 +24,7 @@ from ftplan_ros.core.distance_kernels import (
     CYLINDER,
     SPHERE,
     link_box_clearance,
+    link_clear_over_box,
     planar_joint_points,
     planar_link_clearances,
     segment_distance,
@@ -276,6 +277,36 @@ def test_link_box_clearance_is_below_every_configuration_of_the_box(links, rng):
                 assert sampled[k] - bound < 1e-3, (k, centre, half)
     assert closest < 1e-4
 
+
+
+def test_link_clear_over_box_is_sound_and_decides_what_either_bound_does(rng):
+    """Sound by dense sampling; True wherever the lever or the fan bound alone says so."""
+    lengths = np.array([1.0, 0.8, 0.6])
+    centres = np.hstack([rng.uniform(-2.2, 2.2, (6, 2)), rng.uniform(-0.2, 0.2, (6, 1))])
+    radii = rng.uniform(0.05, 0.3, 6)
+    arms = np.array([[lengths[a:k + 1].sum() for a in range(3)] for k in range(3)])
+    points = np.zeros((4, 2))
+    outcomes, by_fan = set(), 0
+    for _ in range(400):
+        centre = rng.uniform(-np.pi, np.pi, 3)
+        half = rng.uniform(0.0, 0.15, 3)
+        reach = rng.choice([0.0, 0.05])
+        planar_joint_points(lengths, centre, points)
+        corners = centre + half * rng.uniform(-1.0, 1.0, (1500, 3))
+        sampled = planar_link_clearances(lengths, 0.0, centres, radii, corners).min(axis=0)
+        at_centre = planar_link_clearances(lengths, 0.0, centres, radii, centre[None])[0]
+        for k in range(3):
+            motion = float(half @ arms[k]) + 1e-9
+            clear = link_clear_over_box(points, k, lengths[k], centre[:k + 1].sum(), half,
+                                        motion, centres, radii, reach)
+            lever = at_centre[k] - reach > motion
+            fan = link_box_clearance(points, k, lengths[k], centre[:k + 1].sum(), half,
+                                     centres, radii) > reach
+            assert clear or not (lever or fan)
+            assert not clear or sampled[k] > reach, (k, centre, half)
+            outcomes.add(clear)
+            by_fan += clear and not lever
+    assert outcomes == {True, False} and by_fan > 10
 
 # Tier 1: closed forms with a sphere -----------------------------------------------------
 

@@ -30,6 +30,7 @@ import numpy as np
 from .distance_kernels import (
     ROUNDING,
     link_box_clearance,
+    link_clear_over_box,
     planar_joint_points,
     segment_disk_clearance,
     segment_gap2,
@@ -264,9 +265,10 @@ def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified
 def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
     """Whether every configuration of the triangle `corners` (3, n) [rad] is free.
 
-    Over the box of the corners' spread about the centroid, every link must be free by the
-    lever bound of `_link_status` or by `link_box_clearance`; otherwise the triangle is
-    split in four, `depth` times at most.
+    Over the box of the corners' spread about the centroid, every link must clear every
+    disk by the lever bound of `_link_status` or by the fan bound of `link_box_clearance`
+    (`link_clear_over_box`); otherwise the triangle is split in four, `depth` times at
+    most.
     """
     n = corners.shape[1]
     stack = np.empty((4 * depth + 1, 3, n))
@@ -294,8 +296,9 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
                          - link_radius)
             if clearance <= 0.0:
                 return False
-            if clearance <= _link_motion_bound(points, arms, half, k) and link_box_clearance(
-                    points, k, lengths[k], direction, half, centres, radii) <= link_radius:
+            if free and not link_clear_over_box(points, k, lengths[k], direction, half,
+                                                _link_motion_bound(points, arms, half, k),
+                                                centres, radii, link_radius):
                 free = False
         if free:
             continue

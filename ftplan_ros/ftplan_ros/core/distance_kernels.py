@@ -363,6 +363,29 @@ def sphere_drift(points, k, cx, cy, half):
     return drift
 
 
+@numba.njit(cache=True, inline='always')
+def _box_gap(points, k, length, direction, half, centre):
+    """Lower bound [m] on the distance from link k's segment to a point over a box.
+
+    See `link_box_clearance`; `centre` (3,) [m] is the point, a sphere's centre.
+    """
+    cx, cy = centre[0], centre[1]
+    drift = sphere_drift(points, k, cx, cy, half)
+    dx, dy = cx - points[k, 0], cy - points[k, 1]
+    distance = np.sqrt(dx * dx + dy * dy)
+    turn = abs(wrap_one(np.arctan2(dy, dx) - direction)) - half[k]
+    if turn <= 0.0:
+        planar = max(0.0, distance - length)
+    elif turn >= 0.5 * np.pi:
+        planar = distance
+    elif distance * np.cos(turn) <= length:
+        planar = distance * np.sin(turn)
+    else:  # the tip, by the law of cosines without cancellation
+        planar = np.sqrt((distance - length) ** 2
+                         + 4.0 * distance * length * np.sin(0.5 * turn) ** 2)
+    return np.sqrt(planar * planar + centre[2] * centre[2]) - drift - ROUNDING
+
+
 @numba.njit(cache=True)
 def link_box_clearance(points, k, length, direction, half, centres, radii):
     """Lower bound [m] on the distance from link k's segment to the spheres over a box.
@@ -377,23 +400,27 @@ def link_box_clearance(points, k, length, direction, half, centres, radii):
     """
     best = np.inf
     for p in range(centres.shape[0]):
-        cx, cy = centres[p, 0], centres[p, 1]
-        drift = sphere_drift(points, k, cx, cy, half)
-        dx, dy = cx - points[k, 0], cy - points[k, 1]
-        distance = np.sqrt(dx * dx + dy * dy)
-        turn = abs(wrap_one(np.arctan2(dy, dx) - direction)) - half[k]
-        if turn <= 0.0:
-            planar = max(0.0, distance - length)
-        elif turn >= 0.5 * np.pi:
-            planar = distance
-        elif distance * np.cos(turn) <= length:
-            planar = distance * np.sin(turn)
-        else:  # the tip, by the law of cosines without cancellation
-            planar = np.sqrt((distance - length) ** 2
-                             + 4.0 * distance * length * np.sin(0.5 * turn) ** 2)
-        gap = np.sqrt(planar * planar + centres[p, 2] * centres[p, 2])
-        best = min(best, gap - radii[p] - drift - ROUNDING)
+        best = min(best, _box_gap(points, k, length, direction, half, centres[p]) - radii[p])
     return best
+
+
+@numba.njit(cache=True)
+def link_clear_over_box(points, k, length, direction, half, motion, centres, radii, reach):
+    """Whether link k's segment clears every sphere by more than `reach` [m] over a box.
+
+    The box is `link_box_clearance`'s. Per sphere either of two lower bounds may show it:
+    the exact distance at the box's centre less `motion` [m] (a bound on how far any
+    point of the link moves in the box: the lever bound), or the fan bound of
+    `link_box_clearance`, the dearer, computed only for the spheres the lever bound
+    leaves undecided. A NaN anywhere answers False.
+    """
+    for p in range(centres.shape[0]):
+        gap = np.sqrt(segment_gap2(points[k], points[k + 1], centres[p])) - radii[p] - reach
+        if gap > motion:
+            continue
+        if not _box_gap(points, k, length, direction, half, centres[p]) - radii[p] > reach:
+            return False
+    return True
 
 
 @numba.njit(cache=True)

@@ -38,7 +38,7 @@ import numba
 import numpy as np
 
 from .collision import CollisionChecker
-from .distance_kernels import link_box_clearance, planar_joint_points, segment_disk_clearance
+from .distance_kernels import link_clear_over_box, planar_joint_points, segment_disk_clearance
 from .failure_surface import FailureSurface
 from .paths import point_at_fraction
 from .recovery import recover
@@ -143,8 +143,11 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
                     rounding):
     """`_measure_level` for a planar chain among spheres, compiled: no clearance array.
 
-    A simplex stays open unless every link is clear by more than `margin` over the box of
-    its spread, by the lever bound or by `link_box_clearance` (tighter near the joints).
+    A simplex stays open unless every link is clear of every sphere by more than `margin`
+    over the box of its spread, by the lever bound or by the fan bound of
+    `link_box_clearance` (tighter near the joints), the better per sphere
+    (`link_clear_over_box`). `cap` bounds the clearance of the culled spheres at every
+    configuration.
     """
     count, c, n = corners.shape
     smallest = np.inf
@@ -173,12 +176,12 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
             smallest = min(smallest, clearance)
             if not clearance > margin and first_hit < 0:  # NaN counts as a hit
                 first_hit = s
-            motion = 0.0
+            motion = rounding
             for a in range(n):
                 motion += spread[a] * arms[k, a]
-            if not clearance - margin > motion + rounding and not min(
-                    link_box_clearance(points, k, lengths[k], direction, spread, centres,
-                                       radii) - link_radius, cap) > margin:
+            if not (cap > margin and link_clear_over_box(
+                    points, k, lengths[k], direction, spread, motion, centres, radii,
+                    link_radius + margin)):
                 opened[s] = True
     return first_hit, opened, smallest
 
