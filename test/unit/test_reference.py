@@ -20,7 +20,12 @@ from ftplan_ros.core.reference import (
     proves_yes,
 )
 from ftplan_ros.core.scene import Obstacle
-from ftplan_ros.core.tolerant_set import pooled_tolerant_set, preimage_samples, tolerant_set
+from ftplan_ros.core.tolerant_set import (
+    TolerantSet,
+    pooled_tolerant_set,
+    preimage_samples,
+    tolerant_set,
+)
 from ftplan_ros.core.web_search import PROVED_NONE
 from ftplan_ros.crowded import crowded_scene
 
@@ -152,6 +157,23 @@ def test_a_no_plan_proof_on_pooled_classes_comes_before_the_finer_grid():
     assert not result.feasible and result.stats['proved_infeasible']
     assert result.reason.startswith(f'{PROVED_NONE}, 64^3 cells pooled from 128^3')
 
+
+
+def test_a_pooled_grid_proves_no_with_the_finer_grids_start_and_goal_cells():
+    """Random scene 10 of the recall bench (seed 1): on the 128^3 classes pooled to 64^3,
+    the proof holds with the 128^3 cells that may hold a start or a goal, pooled, and
+    fails with the 64^3 cells' own, wider, bounds. The planner proves it there."""
+    rng = np.random.default_rng([1, 0, 10])
+    scene = random_scene(rng, int(rng.integers(0, 21)))
+    fine = tolerant_set(scene, 128)
+    pooled = pooled_tolerant_set(fine)
+    assert proves_no(pooled)
+    own_bounds = TolerantSet(scene, fine.classes.pooled(), fine.joints)
+    assert not proves_no(own_bounds)
+    assert pooled.near_start.sum() < own_bounds.near_start.sum()
+    result = plan(scene)
+    assert not result.feasible and result.stats['proved_infeasible']
+    assert result.reason.startswith(f'{PROVED_NONE}, 64^3 cells pooled from 128^3')
 
 def test_stopping_at_the_first_joints_never_changes_an_answer():
     """proves_no and certified_holding stop early; every joint counted, they say the same.

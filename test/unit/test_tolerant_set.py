@@ -34,6 +34,7 @@ from ftplan_ros.core.scene import Obstacle
 from ftplan_ros.core.tolerant_set import (
     locked_goal_configurations,
     locked_goal_configurations_at,
+    pooled_tolerant_set,
     preimage_samples,
     sub_slab_count,
     tolerant_set,
@@ -504,6 +505,23 @@ def test_tool_near_holds_every_configuration_near_the_point(fig3a):
     assert near[tuple(cells.T)].all()
     assert near.mean() < 0.05
 
+
+
+def test_a_pooled_grid_takes_its_start_and_goal_cells_from_the_finer_grid(fig3a):
+    """The blocks holding a cell of the finer grid's masks: no wider than the pooled
+    lattice's own bounds, and holding every exact start and goal configuration."""
+    scene, grid, _ = fig3a
+    pooled = pooled_tolerant_set(grid)
+    task, blocks = scene.task, (32, 2, 32, 2, 32, 2)
+    for mine, finer, x, tolerance in ((pooled.near_start, grid.near_start, task.start, 0.0),
+                                      (pooled.near_goal, grid.near_goal, task.goal,
+                                       task.goal_tolerance)):
+        x = np.asarray(x, dtype=float)
+        assert np.array_equal(mine, finer.reshape(blocks).any(axis=(1, 3, 5)))
+        own = pooled.lattice.tool_near(scene.robot, x, tolerance)
+        assert not (mine & ~own).any() and mine.sum() < own.sum()
+        exact = preimage_samples(LINKS, x, 400)
+        assert mine[tuple(pooled.lattice.cell_of(exact).T)].all()
 
 @pytest.mark.parametrize('lengths, limited', [((1.0, 1.0, 1.0), False), ((1.2, 0.7, 0.4), True),
                                                ((0.5, 1.0, 1.5), False)])

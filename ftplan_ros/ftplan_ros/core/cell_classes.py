@@ -363,20 +363,31 @@ def _tool_near(lengths, lower, step, cells, x, reach):
     return out
 
 
+def pool_blocks(mask: np.ndarray, every: bool) -> np.ndarray:
+    """Pool a mask (N, N, N) bool (N even) into blocks of 2^3: (N/2)^3, all of a block or any."""
+    cells = mask.shape[0]
+    if cells % 2:
+        raise ValueError(f'{cells} cells per joint cannot be pooled in pairs')
+    out = np.empty((cells // 2,) * 3, dtype=np.bool_)
+    _pool(np.ascontiguousarray(mask, dtype=np.bool_), every, out)
+    return out
+
+
 @numba.njit(cache=True)
-def _pool(certified, possible, pooled_certified, pooled_possible):
-    """Fill the pooled classes (N/2)^3 from (N)^3: all of a block's 2^3, or any."""
-    half = pooled_certified.shape[0]
+def _pool(mask, every, out):
+    """Fill `out` (N/2)^3 from `mask` (N)^3: all of each block's 2^3 cells, or any."""
+    half = out.shape[0]
     for i in range(half):
         for j in range(half):
             for k in range(half):
-                every, some = True, False
+                value = every
                 for a in range(2 * i, 2 * i + 2):
                     for b in range(2 * j, 2 * j + 2):
-                        every &= certified[a, b, 2 * k] & certified[a, b, 2 * k + 1]
-                        some |= possible[a, b, 2 * k] | possible[a, b, 2 * k + 1]
-                pooled_certified[i, j, k] = every
-                pooled_possible[i, j, k] = some
+                        if every:
+                            value &= mask[a, b, 2 * k] & mask[a, b, 2 * k + 1]
+                        else:
+                            value |= mask[a, b, 2 * k] | mask[a, b, 2 * k + 1]
+                out[i, j, k] = value
 
 
 @dataclass(frozen=True)
@@ -437,13 +448,10 @@ class CellClasses:
         often sharper than classifying the coarse grid itself.
         """
         cells = self.lattice.cells
-        if cells % 2:
-            raise ValueError(f'{cells} cells per joint cannot be pooled in pairs')
+        certified = pool_blocks(self.certified, every=True)
+        possible = pool_blocks(self.possible, every=False)
         lattice = JointLattice(cells // 2, self.lattice.lower.copy(), 2.0 * self.lattice.step,
                                self.lattice.periodic.copy())
-        certified = np.empty((cells // 2,) * 3, dtype=np.bool_)
-        possible = np.empty_like(certified)
-        _pool(self.certified, self.possible, certified, possible)
         return CellClasses(lattice, certified, possible)
 
 

@@ -85,14 +85,11 @@ def proves_no(grid: TolerantSet) -> bool:
     The joints are taken in turn: once those so far leave no cell that may hold a start
     (or a goal), none is left when every joint counts, and the rest need not be computed.
     """
-    lattice = grid.lattice
-    robot, task = grid.scene.robot, grid.scene.task
-    start = lattice.tool_near(robot, np.asarray(task.start, dtype=float))
-    goal = grid.near_goal
+    start, goal = grid.near_start, grid.near_goal
     outside = grid.liberal_holding((start, goal))
     if outside is None:
         return True
-    found = components(outside, lattice.periodic)
+    found = components(outside, grid.lattice.periodic)
     shared = found.holding(start) & found.holding(goal)
     return not shared[1:].any()
 

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .cell_classes import CellClasses, JointLattice, classify_cells, supports
+from .cell_classes import CellClasses, JointLattice, classify_cells, pool_blocks, supports
 from .components import Components, layer_components, overlap
 from .errors import InputError
 from .robot import PlanarChain
@@ -138,12 +138,15 @@ class TolerantSet:
     locked (under-approximation) and the goal configurations that show it; the cells that
     may hold such a configuration (`liberal_escape(i)`, the over-approximation) are only
     needed by a proof that no plan exists. Each is computed for one joint at a time, when
-    first asked for, so that a search that fails after one joint skips the others.
+    first asked for, so that a search that fails after one joint skips the others. A
+    grid pooled from a `finer` one (`pooled_tolerant_set`) takes the cells that may put
+    the tool at the start or the goal from it.
     """
 
     scene: Scene
     classes: CellClasses
     joints: tuple[int, ...]
+    finer: TolerantSet | None = None
     _escapes: dict = field(default_factory=dict, init=False, repr=False)
     _liberal_escapes: dict = field(default_factory=dict, init=False, repr=False)
 
@@ -178,10 +181,24 @@ class TolerantSet:
 
     @cached_property
     def near_goal(self) -> np.ndarray:
-        """(N, N, N) bool: cells that may put the tool within the goal tolerance."""
+        """(N, N, N) bool: cells that may put the tool within the goal tolerance.
+
+        On a pooled grid, the finer grid's cells pooled: a block may when one of its
+        cells may, and their bounds are sharper.
+        """
+        if self.finer is not None:
+            return pool_blocks(self.finer.near_goal, every=False)
         task = self.scene.task
         return self.lattice.tool_near(self.scene.robot, np.asarray(task.goal, dtype=float),
                                       task.goal_tolerance)
+
+    @cached_property
+    def near_start(self) -> np.ndarray:
+        """(N, N, N) bool: cells that may put the tool at the start (pooled as `near_goal`)."""
+        if self.finer is not None:
+            return pool_blocks(self.finer.near_start, every=False)
+        return self.lattice.tool_near(self.scene.robot,
+                                      np.asarray(self.scene.task.start, dtype=float))
 
     def liberal_escape(self, joint: int) -> np.ndarray:
         """(N, N, N) bool: cells that may escape with `joint` locked (components found once).
@@ -250,6 +267,7 @@ def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
 def pooled_tolerant_set(grid: TolerantSet) -> TolerantSet | None:
     """G on the grid's classes pooled in blocks of 2^3 (`CellClasses.pooled`).
 
+    The cells that may put the tool at the start or the goal are the grid's, pooled.
     None when the grid has an odd number of cells per joint, or when the pooled cells
     are too coarse for the goal tolerance.
     """
@@ -258,7 +276,7 @@ def pooled_tolerant_set(grid: TolerantSet) -> TolerantSet | None:
     classes = grid.classes.pooled()
     if not _fine_enough(grid.scene, classes.lattice):
         return None
-    return TolerantSet(grid.scene, classes, grid.joints)
+    return TolerantSet(grid.scene, classes, grid.joints, finer=grid)
 
 
 def _fine_enough(scene: Scene, lattice: JointLattice) -> bool:
