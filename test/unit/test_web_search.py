@@ -20,7 +20,13 @@ from ftplan_ros.core.failure_planes import failure_hypercube
 from ftplan_ros.core.paths import densify, path_length, point_at_fraction
 from ftplan_ros.core.reference import Existence, decide_existence
 from ftplan_ros.core.verification import VerificationOptions, verify_surface
-from ftplan_ros.core.web_search import METHOD, PAPER_METHOD, _bfs, _greedy_cuts
+from ftplan_ros.core.web_search import (
+    METHOD,
+    PAPER_METHOD,
+    _bfs,
+    _greedy_cuts,
+    _piece_middles,
+)
 from ftplan_ros.crowded import RADII, crowded_scene
 
 HALF_DEGREE = np.radians(0.5)
@@ -272,6 +278,42 @@ def test_the_grid_search_finds_a_shortest_path_through_the_mask():
         assert gaps.max(initial=0) <= 1, trial
     assert found > 50
 
+
+
+def sorted_piece_middles(a, b):
+    """Reference for `_piece_middles`: every grid crossing's t, sorted; slivers left out."""
+    ts = [0.0, 1.0]
+    for axis in range(len(a)):
+        low, high = sorted((a[axis], b[axis]))
+        ts += [(line - a[axis]) / (b[axis] - a[axis])
+               for line in np.arange(np.floor(low) + 1.0, high) if line < high]
+    ts = np.sort(ts)
+    sliver = 1e-9 / max(1e-300, np.abs(b - a).max())
+    pieces = np.diff(ts)
+    keep = (pieces > sliver) | (len(pieces) == 1)
+    return 0.5 * (ts[:-1] + ts[1:])[keep]
+
+
+def test_a_segments_pieces_come_in_order_at_every_grid_crossing():
+    """`_piece_middles` against sorting every crossing, on segments through grid lines and
+    corners, of no length, or nearly on a line; and the cells of dense samples (off the
+    grid lines) are the cells of the middles."""
+    rng = np.random.default_rng(8)
+    for trial in range(3000):
+        dims = 2 + trial % 2
+        a = rng.integers(-3, 9, dims) * rng.choice([1.0, 0.5])
+        b = a.copy() if trial % 11 == 0 else rng.integers(-3, 9, dims) * rng.choice([1.0, 0.5])
+        if trial % 3:
+            a = a + rng.uniform(-1.0, 1.0, dims) * rng.choice([1.0, 1e-10])
+            b = b + rng.uniform(-1.0, 1.0, dims) * rng.choice([1.0, 1e-10])
+        middles = _piece_middles(a, b)
+        expected = sorted_piece_middles(a, b)
+        assert middles.shape == expected.shape and np.array_equal(middles, expected), trial
+        samples = a + np.linspace(0.0, 1.0, 2001)[:, None] * (b - a)
+        off_lines = np.all(np.abs(samples - np.round(samples)) > 1e-6, axis=1)
+        seen = {tuple(c) for c in np.floor(samples[off_lines]).astype(int)}
+        cells = {tuple(c) for c in np.floor(a + middles[:, None] * (b - a)).astype(int)}
+        assert seen <= cells, trial
 
 def test_straight_cuts_stay_in_the_mask_and_within_the_longest_cut():
     """`_greedy_cuts` on random walks through random masks, 2-D and 3-D, periodic or not.

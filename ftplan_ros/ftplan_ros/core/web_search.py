@@ -44,7 +44,7 @@ from dataclasses import replace
 import numba
 import numpy as np
 
-from .angles import wrap_angle
+from .angles import wrap_angle, wrap_one
 from .cell_classes import disk_arrays, link_lever_arms, supports, triangle_free
 from .collision import CollisionChecker
 from .failure_surface import FailureSurface
@@ -333,9 +333,18 @@ def _lengthen_end(gamma: np.ndarray, extra: int) -> np.ndarray:
     return np.vstack([gamma[:-1], a + t * (b - a), b[None]])
 
 
-def _step(difference: np.ndarray, periodic: np.ndarray) -> np.ndarray:
-    """Return the step the shortest way round for periodic joints."""
-    return np.where(periodic, wrap_angle(difference), difference)
+@numba.njit(cache=True)
+def _step(difference, periodic):
+    """Return the step (..., d) [rad] the shortest way round for periodic joints (d,).
+
+    Compiled, as the sheet builder takes thousands of steps of two or three angles.
+    """
+    out = np.ascontiguousarray(difference).copy()
+    flat = out.reshape(-1)
+    for k in range(flat.shape[0]):
+        if periodic[k % periodic.shape[0]]:
+            flat[k] = wrap_one(flat[k])
+    return out
 
 
 # Step 3: recovery sheets ----------------------------------------------------------------
@@ -695,14 +704,20 @@ def _triangle_free(mask, a, b, c, periodic):
     """
     flat = mask.ravel()
     shape = np.array(mask.shape)
-    if not (_cut_free(flat, shape, periodic, a, b) and _cut_free(flat, shape, periodic, b, c)
-            and _cut_free(flat, shape, periodic, c, a)):
+    crossings = np.empty((2, 2))
+    if not (_cut_free(flat, shape, periodic, a, b, crossings)
+            and _cut_free(flat, shape, periodic, b, c, crossings)
+            and _cut_free(flat, shape, periodic, c, a, crossings)):
         return False
     steps = int(np.ceil(max(max(abs(b[0] - a[0]), abs(b[1] - a[1])),
                             max(abs(c[0] - a[0]), abs(c[1] - a[1]))) * 4.0))
+    start, end = np.empty(2), np.empty(2)
     for s in range(1, steps):
         u = s / steps
-        if not _cut_free(flat, shape, periodic, a + u * (b - a), a + u * (c - a)):
+        for axis in range(2):
+            start[axis] = a[axis] + u * (b[axis] - a[axis])
+            end[axis] = a[axis] + u * (c[axis] - a[axis])
+        if not _cut_free(flat, shape, periodic, start, end, crossings):
             return False
     return True
 
@@ -715,33 +730,58 @@ def _piece_middles(a, b):
     cell are rounding at a grid line and are left out, so a segment through a grid corner
     does not enter the cells beside it.
     """
-    count = 2
-    for axis in range(a.shape[0]):
-        count += int(abs(np.floor(b[axis]) - np.floor(a[axis])))
-    ts = np.empty(count)
-    ts[0] = 0.0
-    ts[1] = 1.0
-    n = 2
-    longest = 0.0
-    for axis in range(a.shape[0]):
-        low = min(a[axis], b[axis])
-        high = max(a[axis], b[axis])
-        longest = max(longest, high - low)
-        line = np.floor(low) + 1.0
-        while line < high:
-            ts[n] = (line - a[axis]) / (b[axis] - a[axis])
-            n += 1
-            line += 1.0
-    ts = np.sort(ts[:n])
-    sliver = 1e-9 / max(1e-300, longest)
-    middles = np.empty(n - 1)
+    crossings = np.empty((2, a.shape[0]))
+    pieces, sliver = _first_crossings(a, b, crossings)
+    middles = np.empty(pieces)
     found = 0
-    for k in range(n - 1):
-        if ts[k + 1] - ts[k] <= sliver and not (k == 0 and n == 2):
-            continue
-        middles[found] = 0.5 * (ts[k] + ts[k + 1])
-        found += 1
+    before = 0.0
+    for _ in range(pieces):
+        after = _next_crossing(a, b, crossings)
+        if after - before > sliver or pieces == 1:
+            middles[found] = 0.5 * (before + after)
+            found += 1
+        before = after
     return middles[:found]
+
+
+@numba.njit(cache=True, inline='always')
+def _first_crossings(a, b, crossings):
+    """Set up the walk along segment a-b over its grid crossings (`_next_crossing`).
+
+    `crossings` (2, d) gets each axis's first grid line strictly between the ends (in
+    the order the segment meets them) and how many it has. Returns the number of pieces
+    and the length in t [0, 1] of a sliver, a billionth of a cell along the longest axis.
+    """
+    longest = 0.0
+    pieces = 1
+    for axis in range(a.shape[0]):
+        low, high = min(a[axis], b[axis]), max(a[axis], b[axis])
+        longest = max(longest, high - low)
+        first, last = np.floor(low) + 1.0, np.ceil(high) - 1.0
+        count = max(0.0, last - first + 1.0)
+        crossings[0, axis] = first if b[axis] > a[axis] else last
+        crossings[1, axis] = count
+        pieces += int(count)
+    return pieces, 1e-9 / max(1e-300, longest)
+
+
+@numba.njit(cache=True, inline='always')
+def _next_crossing(a, b, crossings):
+    """Return t of the segment's next grid crossing (1 after the last), and pass it.
+
+    Each axis meets its lines in order of t, so the next of all is the least of each
+    axis's next: no sorting.
+    """
+    after, nearest = 1.0, -1
+    for axis in range(a.shape[0]):
+        if crossings[1, axis] > 0.0:
+            t = (crossings[0, axis] - a[axis]) / (b[axis] - a[axis])
+            if nearest < 0 or t < after:
+                after, nearest = t, axis
+    if nearest >= 0:
+        crossings[0, nearest] += 1.0 if b[nearest] > a[nearest] else -1.0
+        crossings[1, nearest] -= 1.0
+    return after
 
 
 @numba.njit(cache=True)
@@ -787,11 +827,12 @@ def _greedy_cuts_kernel(mask, shape, periodic, offsets, longest):
     kept[0] = 0
     count = 1
     k = 0
+    crossings = np.empty((2, offsets.shape[1]))
     while k < offsets.shape[0] - 1:
         far = k + 1
         for candidate in range(k + 2, offsets.shape[0]):
-            if np.max(np.abs(offsets[candidate] - offsets[k])) > longest or \
-                    not _cut_free(mask, shape, periodic, offsets[k], offsets[candidate]):
+            if np.max(np.abs(offsets[candidate] - offsets[k])) > longest or not _cut_free(
+                    mask, shape, periodic, offsets[k], offsets[candidate], crossings):
                 break
             far = candidate
         kept[count] = far
@@ -801,22 +842,35 @@ def _greedy_cuts_kernel(mask, shape, periodic, offsets, longest):
 
 
 @numba.njit(cache=True)
-def _cut_free(mask, shape, periodic, a, b):
-    """Whether every cell the segment a-b (in cell units) passes through is in the flat mask."""
-    middles = _piece_middles(a, b)
-    for k in range(middles.shape[0]):
-        t = middles[k]
-        flat = 0
-        for axis in range(a.shape[0]):
-            value = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
-            if periodic[axis]:
-                value %= shape[axis]
-            elif value < 0 or value >= shape[axis]:
-                return False
-            flat = flat * shape[axis] + value
-        if not mask[flat]:
+def _cut_free(mask, shape, periodic, a, b, crossings):
+    """Whether every cell the segment a-b (in cell units) passes through is in the flat mask.
+
+    The pieces of `_piece_middles`, walked without storing them; `crossings` (2, d) is
+    scratch space for the walk.
+    """
+    pieces, sliver = _first_crossings(a, b, crossings)
+    before = 0.0
+    for _ in range(pieces):
+        after = _next_crossing(a, b, crossings)
+        if (after - before > sliver or pieces == 1) and not _cell_in(
+                mask, shape, periodic, a, b, 0.5 * (before + after)):
             return False
+        before = after
     return True
+
+
+@numba.njit(cache=True, inline='always')
+def _cell_in(mask, shape, periodic, a, b, t):
+    """Whether the cell holding the point at t of segment a-b (cell units) is in the flat mask."""
+    flat = 0
+    for axis in range(a.shape[0]):
+        value = int(np.floor(a[axis] + t * (b[axis] - a[axis])))
+        if periodic[axis]:
+            value %= shape[axis]
+        elif value < 0 or value >= shape[axis]:
+            return False
+        flat = flat * shape[axis] + value
+    return mask[flat]
 
 
 # The steps to a cell's neighbours in 2-D and 3-D (at most one cell along each axis), in
@@ -948,6 +1002,8 @@ def load_sheet_kernels() -> None:
     _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
     _route_cells(np.array([[0.0, 0.0], [1.0, 1.0]]), np.ones(2, dtype=np.bool_), 4)
+    for difference in (np.zeros(2), np.zeros(3), np.zeros((2, 2))):
+        _step(difference, np.ones(difference.shape[-1], dtype=np.bool_))
     _greedy_cuts(mask, grid.lattice.periodic, np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]), 16)
     _greedy_cuts(mask[0], grid.lattice.periodic[1:], np.array([[0.0, 0], [1, 1], [2, 2]]), 16)
     _triangle_free(mask[0], np.zeros(2), np.ones(2), np.array([0.0, 1.0]),
