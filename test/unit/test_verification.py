@@ -84,11 +84,14 @@ def test_the_triangles_certified_cover_every_triangle_of_the_web():
     """Every live triangle is certified, or is an edge or a corner of a proper one that is.
 
     Webs with padded columns (a repeated last point), repeated paths and shared points,
-    as the recovery sheets build them, on a coarse lattice so that points coincide.
+    as the recovery sheets build them, on a coarse lattice so that points coincide; in
+    half of them most points are moved off it, so that most triangles share no point.
     """
     rng = np.random.default_rng(3)
     for trial in range(200):
         paths = rng.integers(0, 4, (int(rng.integers(2, 8)), int(rng.integers(2, 7)), 3)) * 0.5
+        if trial % 2:
+            paths = paths + rng.uniform(0.0, 0.01, paths.shape) * (rng.random(paths.shape) < 0.7)
         for k in range(len(paths)):
             if rng.random() < 0.5:  # padded: the column ends early
                 end = int(rng.integers(1, paths.shape[1]))
@@ -172,6 +175,26 @@ def test_goal_row_bound_holds_against_dense_sampling():
                     assert bound < 3 * true
     assert curved >= 2
 
+
+
+def test_a_goal_row_of_several_sheets_leaves_the_chords_between_them_out():
+    """Chords given: the bound over them is the largest of each sheet's own, a point on
+    no chord counts alone, the chord between two sheets does not count, and a point
+    that is not finite makes the bound NaN (the check then fails)."""
+    x = np.asarray(X_GOAL, dtype=float)
+    task = Task(tuple(x), tuple(x))
+    rng = np.random.default_rng(4)
+    for _ in range(50):
+        points = rng.uniform(-np.pi, np.pi, (7, 3))
+        sheets = [(0, 2), (3, 3), (4, 6)]
+        chords = np.array([0, 1, 4, 5])
+        each = max(goal_row_error(ARM, task, points[first:last + 1], 4)[0]
+                   for first, last in sheets)
+        assert goal_row_error(ARM, task, points, 4, chords)[0] == each
+        # With the chords between the sheets too, the bound is no smaller.
+        assert goal_row_error(ARM, task, points, 4)[0] >= each
+    points[3, 1] = np.nan
+    assert np.isnan(goal_row_error(ARM, task, points, 4, chords)[0])
 
 @pytest.fixture(scope='module')
 def free_plan():

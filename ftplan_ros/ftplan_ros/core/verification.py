@@ -187,36 +187,42 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
 
 
 def goal_row_error(robot: Robot, task: Task, goal_points: np.ndarray, samples: int,
-                   ) -> tuple[float, float]:
+                   chords: np.ndarray | None = None) -> tuple[float, float]:
     """Bounds ([m], [rad]) on the goal row's distance from the goal, position and orientation.
 
-    The goal row is the polyline through the goal points (K, n). The errors are
-    evaluated at enough points per chord (at least `samples` + 1, and enough that the
-    orientation's first-order term stays below a quarter of its tolerance); between two
-    samples of a chord with step δ (n,), the tool leaves the linear interpolation of its
-    position by at most (1/8) Σ_{a,b} R_tip[max(a, b)] |δ_a| |δ_b| (`Robot.tip_lever_arms`)
-    and turns by at most Σ_a |δ_a| / 2 from the nearer sample.
+    The goal row is the polyline through the goal points (K, n), or its chords (k, k+1)
+    for k in `chords` (c,) when given (each sheet of a web has a row of its own); a
+    point on no chord counts by itself. The errors are evaluated at enough points per
+    chord (at least `samples` + 1, and enough that the orientation's first-order term
+    stays below a quarter of its tolerance); between two samples of a chord with step δ
+    (n,), the tool leaves the linear interpolation of its position by at most
+    (1/8) Σ_{a,b} R_tip[max(a, b)] |δ_a| |δ_b| (`Robot.tip_lever_arms`) and turns by at
+    most Σ_a |δ_a| / 2 from the nearer sample.
     """
     x_goal = np.asarray(task.goal, dtype=float)
-    if len(goal_points) < 2:
-        errors = task_errors(robot, x_goal, goal_points)
-        return float(errors[:, 0].max()), float(errors[:, 1].max())
-    a, b = goal_points[:-1], goal_points[1:]
-    turn = np.abs(b - a).sum(axis=1).max()
-    oriented = task.kind in ('axis', 'pose')
-    if oriented:
-        samples = max(samples, int(np.ceil(2.0 * turn / task.orientation_tolerance)))
-    t = np.linspace(0.0, 1.0, samples + 1)
-    chords = a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]
-    errors = task_errors(robot, x_goal, chords)  # (K-1, samples+1, 2)
-    step = np.abs(b - a) / samples  # (K-1, n)
-    tip = robot.tip_lever_arms()
-    pair_arm = tip[np.maximum.outer(np.arange(len(tip)), np.arange(len(tip)))]
-    curvature = np.einsum('ka,ab,kb->k', step, pair_arm, step) / 8.0
-    position = float(np.max(errors[..., 0].max(axis=1) + curvature))
-    if not oriented:
-        return position, 0.0
-    return position, float(np.max(errors[..., 1].max(axis=1) + 0.5 * step.sum(axis=1)))
+    first = np.arange(len(goal_points) - 1) if chords is None else np.asarray(chords, dtype=int)
+    alone = np.ones(len(goal_points), dtype=bool)
+    alone[first] = alone[first + 1] = False
+    errors = task_errors(robot, x_goal, goal_points[alone])  # (j, 2)
+    positions, orientations = [errors[:, 0]], [errors[:, 1]]
+    if len(first):
+        a, b = goal_points[first], goal_points[first + 1]
+        turn = np.abs(b - a).sum(axis=1).max()
+        oriented = task.kind in ('axis', 'pose')
+        if oriented:
+            samples = max(samples, int(np.ceil(2.0 * turn / task.orientation_tolerance)))
+        t = np.linspace(0.0, 1.0, samples + 1)
+        points = a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]
+        errors = task_errors(robot, x_goal, points)  # (c, samples+1, 2)
+        step = np.abs(b - a) / samples  # (c, n)
+        tip = robot.tip_lever_arms()
+        pair_arm = tip[np.maximum.outer(np.arange(len(tip)), np.arange(len(tip)))]
+        curvature = np.einsum('ka,ab,kb->k', step, pair_arm, step) / 8.0
+        positions.append(errors[..., 0].max(axis=1) + curvature)
+        orientations.append(errors[..., 1].max(axis=1) + 0.5 * step.sum(axis=1) if oriented
+                            else np.zeros(1))
+    # np.max, not max(): a NaN must come out and fail the check
+    return float(np.max(np.concatenate(positions))), float(np.max(np.concatenate(orientations)))
 
 
 def structure_problem(surface: FailureSurface) -> str:
@@ -261,11 +267,10 @@ def certify_surface(surface: FailureSurface, checker: CollisionChecker, task: Ta
         problem = slice_problem(surface, surface.tolerated)
     if problem:
         return Verdict(False, problem)
-    position, orientation = 0.0, 0.0
-    for first, last in surface.sheets():
-        sheet = goal_row_error(checker.robot, task, surface.goal_points[first:last + 1],
-                               options.chord_samples)
-        position, orientation = max(position, sheet[0]), max(orientation, sheet[1])
+    chords = np.concatenate([np.arange(first, last, dtype=int) for first, last in
+                             surface.sheets()])
+    position, orientation = goal_row_error(checker.robot, task, surface.goal_points,
+                                           options.chord_samples, chords)
     if not (position <= task.goal_tolerance and orientation <= task.orientation_tolerance):
         return Verdict(False, f'the goal row strays {position:.4f} m, {orientation:.4f} rad '
                        f'from the goal (tolerances {task.goal_tolerance} m, '
@@ -338,10 +343,25 @@ def _distinct_triangles(surface: FailureSurface) -> np.ndarray:
 
     A triangle with a repeated point (where a column is padded) is a segment or a point;
     it is left out when it is an edge or a corner of a proper triangle kept: certifying
-    that triangle certifies it.
+    that triangle certifies it. Only triangles with a corner whose point another vertex
+    shares can repeat a set or be such a segment or point, or hold one, so the others
+    (almost all of the paper's fan) are kept without sorting.
     """
     triangles = surface.triangles[surface.live_triangles]
-    points = surface.vertex_ids[triangles]
+    ids = surface.vertex_ids
+    points = ids[triangles]
+    shared = (np.bincount(ids)[points] > 1).any(axis=1)
+    keep = ~shared
+    keep[np.flatnonzero(shared)[_distinct_sets(points[shared])]] = True
+    return triangles[keep]
+
+
+def _distinct_sets(points: np.ndarray) -> np.ndarray:
+    """Return the indices, in order, of the first triangle (T, 3) of ids with each point set.
+
+    A set with a repeated point is left out when it is an edge or a corner of a proper
+    set (three distinct points) kept.
+    """
     keys = np.sort(points, axis=1).astype(np.int64)
     base = int(keys.max(initial=0)) + 1
     if base ** 3 < 2 ** 63:  # one integer per set: far faster than unique rows
@@ -354,7 +374,7 @@ def _distinct_triangles(surface: FailureSurface) -> np.ndarray:
     proper = (keys[:, 0] != keys[:, 1]) & (keys[:, 1] != keys[:, 2])
     covered = np.zeros(len(keys), dtype=bool)
     covered[~proper] = _within_proper(keys[~proper], keys[proper], base)
-    return triangles[first[~covered]]
+    return first[~covered]
 
 
 def _within_proper(keys: np.ndarray, proper: np.ndarray, base: int) -> np.ndarray:
