@@ -458,3 +458,10 @@ def test_quaternions_and_axis_bases(rng):
         frame = np.column_stack([first, second, axis])
         assert np.allclose(frame.T @ frame, np.eye(3), atol=1e-12)
         assert np.linalg.det(frame) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize('radius', [-0.5, float('nan'), float('inf'), True, '0.1'])
+def test_a_planar_chain_refuses_a_link_radius_that_is_not_a_finite_length(radius):
+    """Built in Python, not parsed: a negative radius would read as extra clearance."""
+    with pytest.raises(InputError, match='robot.link_radius'):
+        PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=radius)

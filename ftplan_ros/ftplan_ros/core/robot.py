@@ -9,6 +9,8 @@ uses: none writes x - f(θ) itself.
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol
@@ -135,6 +137,11 @@ class PlanarChain:
             raise InputError(
                 'robot.joint_limits',
                 f'{len(self.joint_limits)} limits for {len(self.link_lengths)} joints')
+        radius = self.link_radius
+        if isinstance(radius, bool) or not isinstance(radius, numbers.Real) or not (
+                math.isfinite(radius) and radius >= 0.0):  # negative: it would read as clearance
+            raise InputError('robot.link_radius',
+                             f'must be a finite radius >= 0 [m], got {self.link_radius!r}')
 
     @property
     def n_joints(self) -> int:
