@@ -218,8 +218,9 @@ class CollisionChecker:
         Entries are exact wherever they are below `needed` (scalar or (N, C)) and below the
         cap of the culled obstacles (more than `CULL_DISTANCE` beyond the arm's reach);
         above either they may be lower bounds that are still >= the lesser, which is all a
-        caller asking "is it at least this clear?" must know. Without `refine`, tier 3 is skipped:
-        every entry is then a lower bound (a cheap screen), exact only where tiers 1-2 are.
+        caller asking "is it at least this clear?" must know. Without `refine`, tier 3 is
+        skipped: every entry is then a lower bound (a cheap screen), exact only where tiers
+        1-2 are.
         """
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         self.checks += len(thetas)
