@@ -322,8 +322,10 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
 
 
 @numba.njit(cache=True)
-def _tool_near(lengths, lower, step, cells, x, reach):
+def _tool_near(lengths, lower, step, cells, x, reach, pool):
     """(N, N, N) bool: cells that may hold a configuration with the tool within `reach` [m] of x.
+
+    With `pool` = 2, the (N/2)^3 blocks of 2^3 cells that hold such a cell (N even).
 
     In a cell the wrist moves by at most (ℓ_1 + ℓ_2) h_1 + ℓ_2 h_2 from where it is at
     the centre (h the half widths) and the last link's direction φ = θ_1 + θ_2 + θ_3
@@ -333,7 +335,8 @@ def _tool_near(lengths, lower, step, cells, x, reach):
     directions φ within an arc about the direction of x - w (the law of cosines), which
     marks the θ_3 cells of the row as `_classify` marks those within reach of a disk.
     """
-    out = np.zeros((cells, cells, cells), dtype=np.bool_)
+    blocks = cells // pool
+    out = np.zeros((blocks, blocks, blocks), dtype=np.bool_)
     half = 0.5 * step
     r = reach + (lengths[0] + lengths[1]) * half[0] + lengths[1] * half[1]
     turn = half[0] + half[1] + half[2] + _ANGLE_ROUNDING
@@ -359,7 +362,8 @@ def _tool_near(lengths, lower, step, cells, x, reach):
             inside = 0
             for k in range(cells):
                 inside += marks[k]
-                out[i, j, k] = inside > 0
+                if inside > 0:
+                    out[i // pool, j // pool, k // pool] = True
     return out
 
 
@@ -417,13 +421,18 @@ class JointLattice:
         return np.where(self.periodic, wrapped, np.clip(offset, 0, self.cells - 1))
 
     def tool_near(self, robot: PlanarChain, x: np.ndarray, tolerance: float = 0.0,
-                  ) -> np.ndarray:
+                  pooled: bool = False) -> np.ndarray:
         """(N, N, N) bool: cells that may hold a configuration with the tool within tolerance of x.
 
-        Each cell's wrist and last link are bounded apart (`_tool_near`).
+        Each cell's wrist and last link are bounded apart (`_tool_near`). `pooled`: the
+        (N/2)^3 blocks of 2^3 cells that hold such a cell, as `pool_blocks` would pool
+        the mask, without the mask (N even).
         """
+        if pooled and self.cells % 2:
+            raise ValueError(f'{self.cells} cells per joint cannot be pooled in pairs')
         return _tool_near(np.asarray(robot.link_lengths, dtype=float), self.lower, self.step,
-                          self.cells, np.asarray(x, dtype=float)[:2], tolerance + ROUNDING)
+                          self.cells, np.asarray(x, dtype=float)[:2], tolerance + ROUNDING,
+                          2 if pooled else 1)
 
     def inside(self, thetas: np.ndarray) -> np.ndarray:
         """(c,) bool: configurations within the limits of the joints that have them."""

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .cell_classes import CellClasses, JointLattice, classify_cells, pool_blocks, supports
+from .cell_classes import CellClasses, JointLattice, classify_cells, supports
 from .components import Components, layer_components, overlap
 from .errors import InputError
 from .robot import PlanarChain
@@ -186,19 +186,18 @@ class TolerantSet:
         On a pooled grid, the finer grid's cells pooled: a block may when one of its
         cells may, and their bounds are sharper.
         """
-        if self.finer is not None:
-            return pool_blocks(self.finer.near_goal, every=False)
         task = self.scene.task
-        return self.lattice.tool_near(self.scene.robot, np.asarray(task.goal, dtype=float),
-                                      task.goal_tolerance)
+        return self._tool_near(np.asarray(task.goal, dtype=float), task.goal_tolerance)
 
     @cached_property
     def near_start(self) -> np.ndarray:
         """(N, N, N) bool: cells that may put the tool at the start (pooled as `near_goal`)."""
+        return self._tool_near(np.asarray(self.scene.task.start, dtype=float), 0.0)
+
+    def _tool_near(self, x: np.ndarray, tolerance: float) -> np.ndarray:
         if self.finer is not None:
-            return pool_blocks(self.finer.near_start, every=False)
-        return self.lattice.tool_near(self.scene.robot,
-                                      np.asarray(self.scene.task.start, dtype=float))
+            return self.finer.lattice.tool_near(self.scene.robot, x, tolerance, pooled=True)
+        return self.lattice.tool_near(self.scene.robot, x, tolerance)
 
     def liberal_escape(self, joint: int) -> np.ndarray:
         """(N, N, N) bool: cells that may escape with `joint` locked (components found once).
