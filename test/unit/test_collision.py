@@ -278,7 +278,6 @@ def test_link_box_clearance_is_below_every_configuration_of_the_box(links, rng):
     assert closest < 1e-4
 
 
-
 def test_link_clear_over_box_is_sound_and_decides_what_either_bound_does(rng):
     """Sound by dense sampling; True wherever the lever or the fan bound alone says so."""
     lengths = np.array([1.0, 0.8, 0.6])
@@ -307,6 +306,7 @@ def test_link_clear_over_box_is_sound_and_decides_what_either_bound_does(rng):
             outcomes.add(clear)
             by_fan += clear and not lever
     assert outcomes == {True, False} and by_fan > 10
+
 
 # Tier 1: closed forms with a sphere -----------------------------------------------------
 
@@ -534,7 +534,6 @@ def test_culled_obstacles_leave_lower_bounds(name, monkeypatch, rng):
         f'cap {capped[0, 0]:.4f} m above the distance {reference.min():.4f} m'
 
 
-
 @pytest.mark.parametrize('radius', [0.05, 0.8, 2.0])
 def test_a_thick_links_radius_counts_in_its_reach_when_culling(radius, monkeypatch):
     """A capsule reaches its radius beyond its core: an obstacle there is not culled.
@@ -550,6 +549,7 @@ def test_a_thick_links_radius_counts_in_its_reach_when_culling(radius, monkeypat
     assert np.all(measured <= reference + 1e-9)
     assert np.isclose(reference[0, 2], 1.4 - radius)
     assert (measured[0, 2] < 0.0) == (radius > 1.4)
+
 
 # Self-collision, the base, channel names ------------------------------------------------
 

@@ -158,7 +158,6 @@ def test_a_no_plan_proof_on_pooled_classes_comes_before_the_finer_grid():
     assert result.reason.startswith(f'{PROVED_NONE}, 64^3 cells pooled from 128^3')
 
 
-
 def test_a_pooled_grid_proves_no_with_the_finer_grids_start_and_goal_cells():
     """Random scene 10 of the recall bench (seed 1): on the 128^3 classes pooled to 64^3,
     the proof holds with the 128^3 cells that may hold a start or a goal, pooled, and
@@ -174,6 +173,7 @@ def test_a_pooled_grid_proves_no_with_the_finer_grids_start_and_goal_cells():
     result = plan(scene)
     assert not result.feasible and result.stats['proved_infeasible']
     assert result.reason.startswith(f'{PROVED_NONE}, 64^3 cells pooled from 128^3')
+
 
 def test_stopping_at_the_first_joints_never_changes_an_answer():
     """proves_no and certified_holding stop early; every joint counted, they say the same.

@@ -506,7 +506,6 @@ def test_tool_near_holds_every_configuration_near_the_point(fig3a):
     assert near.mean() < 0.05
 
 
-
 def test_a_pooled_grid_takes_its_start_and_goal_cells_from_the_finer_grid(fig3a):
     """The blocks holding a cell of the finer grid's masks: no wider than the pooled
     lattice's own bounds, and holding every exact start and goal configuration."""
@@ -522,6 +521,7 @@ def test_a_pooled_grid_takes_its_start_and_goal_cells_from_the_finer_grid(fig3a)
         assert not (mine & ~own).any() and mine.sum() < own.sum()
         exact = preimage_samples(LINKS, x, 400)
         assert mine[tuple(pooled.lattice.cell_of(exact).T)].all()
+
 
 @pytest.mark.parametrize('lengths, limited', [((1.0, 1.0, 1.0), False), ((1.2, 0.7, 0.4), True),
                                                ((0.5, 1.0, 1.5), False)])

@@ -176,7 +176,6 @@ def test_goal_row_bound_holds_against_dense_sampling():
     assert curved >= 2
 
 
-
 def test_a_goal_row_of_several_sheets_leaves_the_chords_between_them_out():
     """Chords given: the bound over them is the largest of each sheet's own, a point on
     no chord counts alone, the chord between two sheets does not count, and a point
@@ -195,6 +194,7 @@ def test_a_goal_row_of_several_sheets_leaves_the_chords_between_them_out():
         assert goal_row_error(ARM, task, points, 4)[0] >= each
     points[3, 1] = np.nan
     assert np.isnan(goal_row_error(ARM, task, points, 4, chords)[0])
+
 
 @pytest.fixture(scope='module')
 def free_plan():

@@ -279,7 +279,6 @@ def test_the_grid_search_finds_a_shortest_path_through_the_mask():
     assert found > 50
 
 
-
 def sorted_piece_middles(a, b):
     """Reference for `_piece_middles`: every grid crossing's t, sorted; slivers left out."""
     ts = [0.0, 1.0]
@@ -314,6 +313,7 @@ def test_a_segments_pieces_come_in_order_at_every_grid_crossing():
         seen = {tuple(c) for c in np.floor(samples[off_lines]).astype(int)}
         cells = {tuple(c) for c in np.floor(a + middles[:, None] * (b - a)).astype(int)}
         assert seen <= cells, trial
+
 
 def test_straight_cuts_stay_in_the_mask_and_within_the_longest_cut():
     """`_greedy_cuts` on random walks through random masks, 2-D and 3-D, periodic or not.
