@@ -24,7 +24,7 @@ from ftplan_ros.core.distance_kernels import (
     CYLINDER,
     SPHERE,
     link_box_clearance,
-    link_clear_over_box,
+    link_clearance_over_box,
     planar_joint_points,
     planar_link_clearances,
     segment_distance,
@@ -278,8 +278,9 @@ def test_link_box_clearance_is_below_every_configuration_of_the_box(links, rng):
     assert closest < 1e-4
 
 
-def test_link_clear_over_box_is_sound_and_decides_what_either_bound_does(rng):
-    """Sound by dense sampling; True wherever the lever or the fan bound alone says so."""
+def test_link_clearance_over_box_is_sound_and_decides_what_either_bound_does(rng):
+    """The clearance at the centre is exact; clear is sound by dense sampling and True
+    wherever the lever or the fan bound alone says so."""
     lengths = np.array([1.0, 0.8, 0.6])
     centres = np.hstack([rng.uniform(-2.2, 2.2, (6, 2)), rng.uniform(-0.2, 0.2, (6, 1))])
     radii = rng.uniform(0.05, 0.3, 6)
@@ -296,8 +297,10 @@ def test_link_clear_over_box_is_sound_and_decides_what_either_bound_does(rng):
         at_centre = planar_link_clearances(lengths, 0.0, centres, radii, centre[None])[0]
         for k in range(3):
             motion = float(half @ arms[k]) + 1e-9
-            clear = link_clear_over_box(points, k, lengths[k], centre[:k + 1].sum(), half,
-                                        motion, centres, radii, reach)
+            nearest, clear = link_clearance_over_box(points, k, lengths[k],
+                                                     centre[:k + 1].sum(), half, motion,
+                                                     centres, radii, reach)
+            assert nearest == at_centre[k]
             lever = at_centre[k] - reach > motion
             fan = link_box_clearance(points, k, lengths[k], centre[:k + 1].sum(), half,
                                      centres, radii) > reach

@@ -30,9 +30,8 @@ import numpy as np
 from .distance_kernels import (
     ROUNDING,
     link_box_clearance,
-    link_clear_over_box,
+    link_clearance_over_box,
     planar_joint_points,
-    segment_disk_clearance,
     segment_gap2,
     sphere_drift,
 )
@@ -267,7 +266,7 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
 
     Over the box of the corners' spread about the centroid, every link must clear every
     disk by the lever bound of `_link_status` or by the fan bound of `link_box_clearance`
-    (`link_clear_over_box`); otherwise the triangle is split in four, `depth` times at
+    (`link_clearance_over_box`); otherwise the triangle is split in four, `depth` times at
     most.
     """
     n = corners.shape[1]
@@ -292,14 +291,12 @@ def triangle_free(lengths, link_radius, centres, radii, arms, corners, depth):
         direction = 0.0
         for k in range(n):
             direction += centre[k]
-            clearance = (segment_disk_clearance(points[k], points[k + 1], centres, radii)
-                         - link_radius)
-            if clearance <= 0.0:
+            nearest, clear = link_clearance_over_box(
+                points, k, lengths[k], direction, half,
+                _link_motion_bound(points, arms, half, k), centres, radii, link_radius)
+            if nearest - link_radius <= 0.0:
                 return False
-            if free and not link_clear_over_box(points, k, lengths[k], direction, half,
-                                                _link_motion_bound(points, arms, half, k),
-                                                centres, radii, link_radius):
-                free = False
+            free = free and clear
         if free:
             continue
         if level >= depth:

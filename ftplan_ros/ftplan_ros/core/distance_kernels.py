@@ -405,22 +405,26 @@ def link_box_clearance(points, k, length, direction, half, centres, radii):
 
 
 @numba.njit(cache=True)
-def link_clear_over_box(points, k, length, direction, half, motion, centres, radii, reach):
-    """Whether link k's segment clears every sphere by more than `reach` [m] over a box.
+def link_clearance_over_box(points, k, length, direction, half, motion, centres, radii,
+                            reach):
+    """Link k's clearance at a box's centre, and whether it stays clear over the box.
 
-    The box is `link_box_clearance`'s. Per sphere either of two lower bounds may show it:
-    the exact distance at the box's centre less `motion` [m] (a bound on how far any
-    point of the link moves in the box: the lever bound), or the fan bound of
-    `link_box_clearance`, the dearer, computed only for the spheres the lever bound
-    leaves undecided. A NaN anywhere answers False.
+    Returns the distance [m] from link k's segment to the nearest sphere at the box's
+    centre (`segment_disk_clearance`) and whether the segment clears every sphere by
+    more than `reach` [m] over the box of `link_box_clearance`. Per sphere either of two
+    lower bounds may show that: the exact distance at the centre less `motion` [m] (a
+    bound on how far any point of the link moves in the box: the lever bound), or the fan
+    bound of `link_box_clearance`, the dearer, computed only for the spheres the lever
+    bound leaves undecided. A NaN anywhere answers not clear.
     """
+    nearest = np.inf
+    clear = True
     for p in range(centres.shape[0]):
-        gap = np.sqrt(segment_gap2(points[k], points[k + 1], centres[p])) - radii[p] - reach
-        if gap > motion:
-            continue
-        if not _box_gap(points, k, length, direction, half, centres[p]) - radii[p] > reach:
-            return False
-    return True
+        gap = np.sqrt(segment_gap2(points[k], points[k + 1], centres[p])) - radii[p]
+        nearest = min(nearest, gap)
+        if clear and not gap - reach > motion:
+            clear = _box_gap(points, k, length, direction, half, centres[p]) - radii[p] > reach
+    return nearest, clear
 
 
 @numba.njit(cache=True)

@@ -38,7 +38,7 @@ import numba
 import numpy as np
 
 from .collision import CollisionChecker
-from .distance_kernels import link_clear_over_box, planar_joint_points, segment_disk_clearance
+from .distance_kernels import link_clearance_over_box, planar_joint_points
 from .failure_surface import FailureSurface
 from .paths import point_at_fraction
 from .recovery import recover
@@ -146,7 +146,7 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
     A simplex stays open unless every link is clear of every sphere by more than `margin`
     over the box of its spread, by the lever bound or by the fan bound of
     `link_box_clearance` (tighter near the joints), the better per sphere
-    (`link_clear_over_box`). `cap` bounds the clearance of the culled spheres at every
+    (`link_clearance_over_box`). `cap` bounds the clearance of the culled spheres at every
     configuration.
     """
     count, c, n = corners.shape
@@ -171,17 +171,17 @@ def _measure_planar(corners, lengths, link_radius, centres, radii, cap, arms, ma
         direction = 0.0
         for k in range(n):
             direction += centroid[k]
-            clearance = min(segment_disk_clearance(points[k], points[k + 1], centres, radii)
-                            - link_radius, cap)
-            smallest = min(smallest, clearance)
-            if not clearance > margin and first_hit < 0:  # NaN counts as a hit
-                first_hit = s
             motion = rounding
             for a in range(n):
                 motion += spread[a] * arms[k, a]
-            if not (cap > margin and link_clear_over_box(
-                    points, k, lengths[k], direction, spread, motion, centres, radii,
-                    link_radius + margin)):
+            nearest, clear = link_clearance_over_box(points, k, lengths[k], direction, spread,
+                                                     motion, centres, radii,
+                                                     link_radius + margin)
+            clearance = min(nearest - link_radius, cap)
+            smallest = min(smallest, clearance)
+            if not clearance > margin and first_hit < 0:  # NaN counts as a hit
+                first_hit = s
+            if not (cap > margin and clear):
                 opened[s] = True
     return first_hit, opened, smallest
 
