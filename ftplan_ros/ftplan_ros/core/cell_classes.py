@@ -364,12 +364,16 @@ def _tool_near(lengths, lower, step, cells, x, reach, pool):
     return out
 
 
-def pool_blocks(mask: np.ndarray, every: bool) -> np.ndarray:
-    """Pool a mask (N, N, N) bool (N even) into blocks of 2^3: (N/2)^3, all of a block or any."""
-    cells = mask.shape[0]
+def _pooled_cells(cells: int) -> int:
+    """Return N/2, the blocks per joint of N cells pooled in pairs; ValueError for N odd."""
     if cells % 2:
         raise ValueError(f'{cells} cells per joint cannot be pooled in pairs')
-    out = np.empty((cells // 2,) * 3, dtype=np.bool_)
+    return cells // 2
+
+
+def pool_blocks(mask: np.ndarray, every: bool) -> np.ndarray:
+    """Pool a mask (N, N, N) bool (N even) into blocks of 2^3: (N/2)^3, all of a block or any."""
+    out = np.empty((_pooled_cells(mask.shape[0]),) * 3, dtype=np.bool_)
     _pool(np.ascontiguousarray(mask, dtype=np.bool_), every, out)
     return out
 
@@ -425,8 +429,8 @@ class JointLattice:
         (N/2)^3 blocks of 2^3 cells that hold such a cell, as `pool_blocks` would pool
         the mask, without the mask (N even).
         """
-        if pooled and self.cells % 2:
-            raise ValueError(f'{self.cells} cells per joint cannot be pooled in pairs')
+        if pooled:
+            _pooled_cells(self.cells)  # raises for an odd N
         return _tool_near(np.asarray(robot.link_lengths, dtype=float), self.lower, self.step,
                           self.cells, np.asarray(x, dtype=float)[:2], tolerance + ROUNDING,
                           2 if pooled else 1)
