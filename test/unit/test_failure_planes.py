@@ -118,25 +118,38 @@ def test_crossings_skip_the_wrap_jump():
 
 @pytest.mark.parametrize('periodic', [False, True])
 def test_crossings_are_the_sign_changes_of_the_difference(periodic):
-    """The pairs against the definition written with whole arrays, and `first_only`."""
+    """The pairs against the definition written with whole arrays, and `first_only`.
+
+    The kernel looks each segment's levels up among the sorted ones; the cases here hold
+    what that lookup could miss: curves lifted over several turns, levels equal to a
+    sample or a turn away from one, steps near π, and angles too large or not finite.
+    """
     rng = np.random.default_rng(7)
-    for _ in range(50):
-        values = np.cumsum(rng.normal(0.0, 0.4, rng.integers(1, 40)))
-        if periodic:
+    for case in range(2000):
+        values = np.cumsum(rng.normal(0.0, rng.choice([0.01, 0.4, 2.5]), rng.integers(1, 40)))
+        values += rng.choice([0.0, 0.0, 7.0, -20.0])
+        if periodic and case % 3 == 0:
             values = np.angle(np.exp(1j * values))
         levels = rng.uniform(-3.0, 3.0, rng.integers(0, 6))
+        for c in range(len(levels)):
+            if rng.random() < 0.3:  # a sample exactly, or that sample some turns away
+                levels[c] = rng.choice(values) + 2.0 * np.pi * rng.integers(-3, 4)
+        if case % 50 == 0:
+            values[rng.integers(len(values))] = rng.choice([np.nan, np.inf, 3e6])
+            levels = np.append(levels, rng.choice([np.nan, -np.inf, 5e7]))
         difference = values[None, :] - levels[:, None]
         if periodic:
-            difference = np.angle(np.exp(1j * difference))
-        sign = difference < 0.0
-        change = sign[:, 1:] != sign[:, :-1]
-        if periodic:
-            change &= np.abs(np.diff(difference, axis=1)) < np.pi
+            difference = wrap_angle(difference)
+        with np.errstate(invalid='ignore'):
+            sign = difference < 0.0
+            change = sign[:, 1:] != sign[:, :-1]
+            if periodic:
+                change &= np.abs(np.diff(difference, axis=1)) < np.pi
         which, segment = crossing_segments(values, levels, periodic)
-        assert np.array_equal(np.stack([which, segment]), np.stack(np.nonzero(change)))
+        assert np.array_equal(np.stack([which, segment]), np.stack(np.nonzero(change))), case
         first, at = crossing_segments(values, levels, periodic, first_only=True)
         assert np.array_equal(first, np.flatnonzero(change.any(axis=1)))
-        assert np.array_equal(at, np.argmax(change[first], axis=1))
+        assert at.tolist() == [np.flatnonzero(row)[0] for row in change[first]]
 
 
 @pytest.mark.parametrize('name', sorted(TABLE_I))

@@ -78,30 +78,73 @@ def crossing_segments(values: np.ndarray, levels: np.ndarray, periodic: bool,
                       np.ascontiguousarray(levels, dtype=float), bool(periodic), first_only)
 
 
+# Beyond this size [rad] of an angle, or of a step between neighbours, a segment's levels
+# are not looked up among the sorted ones but all tested: the lookup's slack
+# (_LOOKUP_SLACK [rad]) bounds the rounding of the wrap only for angles this small.
+_LOOKUP_RANGE = 1e6
+_LOOKUP_SLACK = 1e-6
+
+
+@numba.njit(cache=True, inline='always')
+def _crosses(value_before, value_after, level, periodic):
+    """Whether the level lies between two neighbouring samples (the definition, exactly)."""
+    before, after = value_before - level, value_after - level
+    if periodic:
+        before, after = wrap_one(before), wrap_one(after)
+    return (before < 0.0) != (after < 0.0) and (not periodic or abs(after - before) < np.pi)
+
+
 @numba.njit(cache=True)
 def _crossings(values, levels, periodic, first_only):
-    """`crossing_segments` in one compiled pass."""
-    count = values.shape[0]
-    most = levels.shape[0] if first_only else levels.shape[0] * max(count - 1, 0)
-    which = np.empty(most, dtype=np.int64)
-    segment = np.empty(most, dtype=np.int64)
-    found = 0
-    for c in range(levels.shape[0]):
-        before = values[0] - levels[c]
+    """`crossing_segments` in one compiled pass over the segments.
+
+    Each segment tests only the levels that may lie between its ends: those whose
+    (wrapped) value falls within its range, widened by a slack that covers the rounding
+    of the wrap, found in the sorted levels. Levels, segments and angles too large for
+    that bound are tested against everything, so the pairs are those of the definition.
+    """
+    count, n_levels = values.shape[0], levels.shape[0]
+    keys = np.empty(n_levels)
+    for c in range(n_levels):
+        keys[c] = wrap_one(levels[c]) if periodic else levels[c]
+    wild = np.flatnonzero(~(np.abs(levels) <= _LOOKUP_RANGE))  # NaN too
+    keys[wild] = np.inf
+    order = np.argsort(keys)
+    tame = n_levels - wild.shape[0]
+    keys = keys[order[:tame]]
+    pairs = []
+    for k in range(count - 1):
+        a, b = values[k], values[k + 1]
+        low, high = min(a, b) - _LOOKUP_SLACK, max(a, b) + _LOOKUP_SLACK
+        if not (abs(a) <= _LOOKUP_RANGE and abs(b) <= _LOOKUP_RANGE) or \
+                (periodic and high - low >= np.pi):
+            for c in range(n_levels):
+                if _crosses(a, b, levels[c], periodic):
+                    pairs.append(c * count + k)
+            continue
+        # A wrapped level w in (-π, π] stands for w + 2πm: the m that reach the range.
+        turns_low, turns_high = 0, 0
         if periodic:
-            before = wrap_one(before)
-        for k in range(1, count):
-            after = values[k] - levels[c]
-            if periodic:
-                after = wrap_one(after)
-            if (before < 0.0) != (after < 0.0) and (not periodic or abs(after - before) < np.pi):
-                which[found] = c
-                segment[found] = k - 1
-                found += 1
-                if first_only:
-                    break
-            before = after
-    return which[:found].copy(), segment[:found].copy()
+            turns_low = int(np.floor((low - np.pi) / (2.0 * np.pi)))
+            turns_high = int(np.ceil((high + np.pi) / (2.0 * np.pi)))
+        for m in range(turns_low, turns_high + 1):
+            shift = 2.0 * np.pi * m
+            first = np.searchsorted(keys, low - shift)
+            last = np.searchsorted(keys, high - shift, side='right')
+            for j in range(first, last):
+                c = order[j]
+                if _crosses(a, b, levels[c], periodic):
+                    pairs.append(c * count + k)
+        for c in wild:
+            if _crosses(a, b, levels[c], periodic):
+                pairs.append(c * count + k)
+    codes = np.sort(np.array(pairs, dtype=np.int64))
+    which, segment = codes // max(count, 1), codes % max(count, 1)
+    if first_only and codes.shape[0]:
+        first = np.ones(codes.shape[0], dtype=np.bool_)
+        first[1:] = which[1:] != which[:-1]
+        which, segment = which[first], segment[first]
+    return which, segment
 
 
 def necessary_condition(robot: Robot, candidates: np.ndarray, arc_points: np.ndarray,
