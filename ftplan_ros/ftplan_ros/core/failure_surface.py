@@ -157,7 +157,16 @@ class FailureSurface:
         Points are numbered in lexicographic order of their coordinates.
         """
         vertices = self.vertices
-        order = np.lexsort(vertices.T[::-1])  # sorts by joint 1, then 2, ...
+        # Sorted by joint 1 alone, only the runs of vertices with equal joint 1 need the
+        # other joints: a web has few (θ_s, padding, a joint held still), and sorting them
+        # apart is far cheaper than sorting every vertex by every joint.
+        order = np.argsort(vertices[:, 0], kind='stable')
+        first = vertices[order, 0]
+        tied = np.zeros(len(order), dtype=bool)
+        tied[1:] = first[1:] == first[:-1]
+        tied[:-1] |= tied[1:]
+        runs = order[tied]
+        order[tied] = runs[np.lexsort(vertices[runs].T[::-1])]
         ordered = vertices[order]
         fresh = np.concatenate([[True], np.any(ordered[1:] != ordered[:-1], axis=1)])
         ids = np.empty(len(vertices), dtype=np.int64)
@@ -166,11 +175,25 @@ class FailureSurface:
 
     @cached_property
     def edge_ids(self) -> np.ndarray:
-        """(E,) one number per distinct segment of `edges` (by the points it joins)."""
-        a, b = self.vertex_ids[self.edges[:, 0]], self.vertex_ids[self.edges[:, 1]]
-        count = int(self.vertex_ids.max()) + 1
-        _, ids = np.unique(np.minimum(a, b) * count + np.maximum(a, b), return_inverse=True)
-        return ids.reshape(-1)
+        """(E,) one number per distinct segment of `edges` (by the points it joins).
+
+        Segments are numbered from 0 without gaps: first those of edges no other edge can
+        repeat, in the order of the edges, then the others.
+        """
+        ids = self.vertex_ids
+        a, b = ids[self.edges[:, 0]], ids[self.edges[:, 1]]
+        # Two edges join the same points only if one of them has an end whose point
+        # another vertex shares: the other edges are distinct segments, numbered in turn.
+        shared = np.bincount(ids) > 1
+        maybe = shared[a] | shared[b]
+        segments = np.empty(len(a), dtype=np.int64)
+        alone = int(np.count_nonzero(~maybe))
+        segments[~maybe] = np.arange(alone)
+        count = len(shared)
+        _, repeated = np.unique(np.minimum(a[maybe], b[maybe]) * count +
+                                np.maximum(a[maybe], b[maybe]), return_inverse=True)
+        segments[maybe] = alone + repeated.reshape(-1)
+        return segments
 
     def sheets(self) -> list[tuple[int, int]]:
         """(first, last) path indices of each sheet, in order."""
