@@ -236,8 +236,12 @@ class CollisionChecker:
 
     def min_clearance(self, thetas: np.ndarray, needed: float = np.inf,
                       refine: bool = True) -> np.ndarray:
-        """Smallest clearance (N,) [m] over all channels (see `clearance`)."""
-        return self.clearance(thetas, needed, refine).min(axis=1, initial=np.inf)
+        """Smallest clearance (N,) [m] over all channels (see `clearance`); NaN stays NaN."""
+        smallest = np.full(len(np.atleast_2d(thetas)), np.inf)
+        # Column by column: numpy's min along short rows is ten times slower.
+        for column in self.clearance(thetas, needed, refine).T:
+            np.minimum(smallest, column, out=smallest)
+        return smallest
 
     def base_clearance(self) -> np.ndarray:
         """Distance (P,) [m] from the robot's base geometry to each obstacle (<= 0: touching)."""

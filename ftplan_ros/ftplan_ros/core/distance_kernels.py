@@ -433,6 +433,7 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
 
     A planar chain of links `lengths` (n,) [m] and capsule radius `link_radius` [m], at
     configurations `thetas` (N, n) [rad]; spheres of `centres` (P, 3) and `radii` (P,).
+    Links that an angle which is not finite places read NaN.
     """
     count, n = thetas.shape
     out = np.empty((count, n))
@@ -445,4 +446,10 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
         for k in range(n):
             out[q, k] = segment_disk_clearance(points[k], points[k + 1], centres,
                                                radii) - link_radius
+        # The nearest-sphere min drops a NaN: links that an angle which is not finite
+        # places read NaN, as in the general tiers, never clear.
+        for k in range(n):
+            if not np.isfinite(thetas[q, k]):
+                out[q, k:] = np.nan
+                break
     return out
