@@ -16,6 +16,7 @@ from ftplan_ros.core import (
 from ftplan_ros.core.brute_force import recoverable_in_plane
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.scene import Obstacle, Task
+from ftplan_ros.core.surface_search import straight_fans
 
 X_GOAL = np.array([1.0, 0.0])
 
@@ -178,3 +179,13 @@ def test_a_narrow_band_of_starts_is_found_whatever_the_sampling(seed):
             assert rescue is not None
             assert checker.min_clearance(densify(rescue.path, 1e-3), 1e-3).min() > 0.0
             assert scene.task.reached(task_errors(scene.robot, X_GOAL, rescue.path[-1]))
+
+
+@pytest.mark.parametrize('n', [3, 7])
+def test_ranking_fans_are_the_points_along_each_straight_path(n):
+    """straight_fans (P, W, G, n) against start + w/W (goal - start), written with arrays."""
+    rng = np.random.default_rng(2)
+    starts, goals = rng.normal(size=(40, n)), rng.normal(size=(40, 6, n))
+    steps = np.arange(1, 9)[None, :, None, None] / 8
+    expected = starts[:, None, None, :] + steps * (goals[:, None] - starts[:, None, None, :])
+    assert np.array_equal(straight_fans(starts, goals, 8), expected)

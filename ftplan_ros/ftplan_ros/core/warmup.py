@@ -17,6 +17,7 @@ from .manifolds import ManifoldOptions, trace_self_motion_manifolds
 from .recovery import recover
 from .robot import PlanarChain, Robot, task_errors, task_residuals
 from .scene import Obstacle
+from .surface_search import straight_fans
 from .verification import certify_simplices
 from .web_search import load_sheet_kernels
 
@@ -46,6 +47,7 @@ def load_kernels(robot: Robot) -> None:
     crossing_segments(np.array([0.0, 1.0]), np.array([0.5]), periodic=True)
     smallest_windows(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1), 1, 1)
     choose_hits([[FailurePlaneHit(0, theta, 0.0)]], (0.0, 0.0))
+    straight_fans(theta[None], theta[None, None], 2)
     fan = np.stack([np.stack([theta, theta + 0.1]), np.stack([theta, theta + 0.2])])
     recover(FailureSurface(fan, 0, (), ()), theta + 0.05, 0)
     if isinstance(robot, PlanarChain) and robot.n_joints == 3:
