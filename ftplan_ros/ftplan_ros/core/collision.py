@@ -225,6 +225,10 @@ class CollisionChecker:
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         self.checks += len(thetas)
         needed = np.broadcast_to(np.asarray(needed, dtype=float), (len(thetas), self.n_channels))
+        if self.planar_disks is not None:  # exact in one compiled pass: no chunks, no tiers
+            *arrays, cap = self.planar_disks
+            clearance = planar_link_clearances(*arrays, np.ascontiguousarray(thetas))
+            return np.minimum(clearance, cap, out=clearance)
         out = np.full((len(thetas), self.n_channels), np.inf)
         if self.n_channels == 0 or len(thetas) == 0:
             return out
@@ -276,9 +280,6 @@ class CollisionChecker:
 
     def _clearance_block(self, thetas: np.ndarray, needed: np.ndarray, refine: bool,
                          ) -> np.ndarray:
-        if self.planar_disks is not None:
-            *arrays, cap = self.planar_disks
-            return np.minimum(planar_link_clearances(*arrays, np.ascontiguousarray(thetas)), cap)
         frames = np.ascontiguousarray(self.robot.link_frames(thetas))  # (N, L, 4, 4)
         poses = shape_poses(frames, self._links, self._placements)  # (N, S, 4, 4)
         out = np.full((len(thetas), self.n_channels), np.inf)
