@@ -122,11 +122,12 @@ def _crossings(values, levels, periodic, first_only):
                 if _crosses(a, b, levels[c], periodic):
                     pairs.append(c * count + k)
             continue
-        # A wrapped level w in (-π, π] stands for w + 2πm: the m that reach the range.
+        # A wrapped level w in (-π, π] stands for w + 2πm: the m that reach the range,
+        # and one more turn each side for a w rounded just past ±π.
         turns_low, turns_high = 0, 0
         if periodic:
-            turns_low = int(np.floor((low - np.pi) / (2.0 * np.pi)))
-            turns_high = int(np.ceil((high + np.pi) / (2.0 * np.pi)))
+            turns_low = int(np.floor((low - np.pi) / (2.0 * np.pi))) - 1
+            turns_high = int(np.ceil((high + np.pi) / (2.0 * np.pi))) + 1
         for m in range(turns_low, turns_high + 1):
             shift = 2.0 * np.pi * m
             first = np.searchsorted(keys, low - shift)
