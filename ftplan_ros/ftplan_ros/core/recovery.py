@@ -156,9 +156,8 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     vertices = np.ascontiguousarray(surface.vertices, dtype=float)  # one compiled signature
     values = np.ascontiguousarray(vertices[:, joint])
     top = surface.goal_vertices
-    goal = np.zeros(source + 1, dtype=np.bool_)
-    goal[point_of[top[values[top] == slice_level]]] = True
-    goal[n_points + segment_of[surface.goal_chords]] = True  # strict crossings of the chords
+    goal = np.unique(np.concatenate([point_of[top[values[top] == slice_level]],
+                                     n_points + segment_of[surface.goal_chords]]))
     beside_start = np.array([t for t in surface.triangles_beside_path_edge(surface.nominal,
                                                                            segment)
                              if surface.live_triangles[t]], dtype=np.int64)
@@ -186,7 +185,10 @@ def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, s
     with θ_joint >= level count as above; a triangle whose corners are all strictly above
     or all below holds no node, and the live triangles beside the start's nominal segment
     hold the start. Arcs join the nodes of a triangle, weighted by their distance; the
-    path ends at the nearest node marked in `goal`.
+    path ends at the nearest node whose id is in `goal` (sorted): the goal row's points on
+    the level and the strict crossings of its chords. Only the nodes of the triangles the
+    level crosses are numbered, so that a call costs little more than a pass over the
+    triangles however large the web.
     """
     n = vertices.shape[1]
     beside = np.zeros(triangles.shape[0], dtype=np.bool_)
@@ -228,14 +230,9 @@ def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, s
             coordinates[c, 6] = start
 
     # Number the nodes in use 0..N-1 in the order of their ids (the start last).
-    local = np.full(source + 1, -1, dtype=np.int64)
-    local[source] = 0
-    for c in range(count):
-        for k in range(7):
-            if slots[c, k] >= 0:
-                local[slots[c, k]] = 0
-    ids = np.flatnonzero(local == 0)
-    local[ids] = np.arange(len(ids))
+    used = slots.ravel()
+    ids = np.unique(np.append(used[used >= 0], source))
+    local = np.searchsorted(ids, slots)  # meaningless where a slot is empty (-1)
     points = np.empty((len(ids), n))
     points[len(ids) - 1] = start
     # Arcs join every two distinct nodes of a triangle; as lists of neighbours (CSR).
@@ -246,11 +243,11 @@ def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, s
         for k in range(7):
             if slots[c, k] < 0:
                 continue
-            points[local[slots[c, k]]] = coordinates[c, k]
+            points[local[c, k]] = coordinates[c, k]
             for q in range(7):
                 if q != k and slots[c, q] >= 0 and slots[c, q] != slots[c, k]:
-                    tails[arcs] = local[slots[c, k]]
-                    heads[arcs] = local[slots[c, q]]
+                    tails[arcs] = local[c, k]
+                    heads[arcs] = local[c, q]
                     arcs += 1
     points[:, joint] = level
     first = np.zeros(len(ids) + 1, dtype=np.int64)
@@ -281,8 +278,9 @@ def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, s
                 previous[other] = node
                 heapq.heappush(queue, (candidate, other))
     best = -1
+    at = np.minimum(np.searchsorted(goal, ids), max(len(goal) - 1, 0))
     for node in range(len(ids)):
-        if goal[ids[node]] and distance[node] < np.inf and \
+        if len(goal) and goal[at[node]] == ids[node] and distance[node] < np.inf and \
                 (best < 0 or distance[node] < distance[best]):
             best = node
     if best < 0:
