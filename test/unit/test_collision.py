@@ -233,20 +233,21 @@ def test_no_obstacles_means_infinite_clearance_and_checks_are_counted():
 
 
 def test_min_clearance_is_the_least_channel_and_keeps_a_nan():
-    """The planar fast path and the general tiers: links placed by an angle that is not
-    finite read NaN, never clear; a single configuration gives one entry."""
+    """The planar fast path and the general tiers: links placed by an angle, or a sum of
+    angles, that is not finite read NaN, never clear; one configuration gives one entry."""
     rng = np.random.default_rng(5)
     disks = [Obstacle('sphere', (1.5, 0.1, 0.0), radius=0.2),
              Obstacle('sphere', (-0.5, 1.2, 0.0), radius=0.3)]
     thetas = rng.uniform(-np.pi, np.pi, (200, 3))
     thetas[17, 1] = np.nan
+    thetas[18, :2] = 1e308  # finite angles whose sum is not
     planar, general = CollisionChecker(ARM, disks), CollisionChecker(ARM, disks, backend='fcl')
     assert planar.planar_disks is not None and general.planar_disks is None
     assert np.array_equal(np.isnan(planar.clearance(thetas)), np.isnan(general.clearance(thetas)))
     for checker in (planar, general):
         lowest = checker.min_clearance(thetas)
         assert np.array_equal(lowest, checker.clearance(thetas).min(axis=1), equal_nan=True)
-        assert np.isnan(lowest[17]) and np.isfinite(np.delete(lowest, 17)).all()
+        assert np.isnan(lowest[17:19]).all() and np.isfinite(np.delete(lowest, [17, 18])).all()
         assert checker.min_clearance(thetas[3]).shape == (1,)
 
 

@@ -433,7 +433,8 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
 
     A planar chain of links `lengths` (n,) [m] and capsule radius `link_radius` [m], at
     configurations `thetas` (N, n) [rad]; spheres of `centres` (P, 3) and `radii` (P,).
-    Links that an angle which is not finite places read NaN.
+    A link whose end is not finite (placed by an angle, or a sum of angles, that is not)
+    reads NaN, as in the general tiers; without spheres every entry is +inf.
     """
     count, n = thetas.shape
     out = np.empty((count, n))
@@ -446,10 +447,10 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
         for k in range(n):
             out[q, k] = segment_disk_clearance(points[k], points[k + 1], centres,
                                                radii) - link_radius
-        # The nearest-sphere min drops a NaN: links that an angle which is not finite
-        # places read NaN, as in the general tiers, never clear.
+        # The nearest-sphere min drops a NaN: a link with an end that is not finite (an
+        # angle, or a sum of angles, that is not) reads NaN, as in the general tiers.
         for k in range(n):
-            if not np.isfinite(thetas[q, k]):
+            if not (np.isfinite(points[k + 1, 0]) and np.isfinite(points[k + 1, 1])):
                 out[q, k:] = np.nan
                 break
     return out

@@ -163,7 +163,7 @@ class FailureSurface:
         order = np.argsort(vertices[:, 0], kind='stable')
         first = vertices[order, 0]
         tied = np.zeros(len(order), dtype=bool)
-        tied[1:] = first[1:] == first[:-1]
+        tied[1:] = (first[1:] == first[:-1]) | (np.isnan(first[1:]) & np.isnan(first[:-1]))
         tied[:-1] |= tied[1:]
         runs = order[tied]
         order[tied] = runs[np.lexsort(vertices[runs].T[::-1])]
