@@ -6,7 +6,7 @@ from ftplan_testing import jacobian
 
 from ftplan_ros.core.angles import configuration_difference
 from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.continuation import _solve_in_place
+from ftplan_ros.core.kernels import solve_in_place
 from ftplan_ros.core.manifolds import (
     ManifoldCache,
     ManifoldOptions,
@@ -157,8 +157,8 @@ def test_the_traces_small_solve_agrees_with_lapack_and_refuses_a_singular_system
         for _ in range(50):
             matrix, rhs = rng.normal(size=(n, n)), rng.normal(size=(n, 2))
             solution = rhs.copy()
-            assert _solve_in_place(matrix.copy(), solution)
+            assert solve_in_place(matrix.copy(), solution)
             assert np.allclose(solution, np.linalg.solve(matrix, rhs), rtol=1e-9, atol=1e-12)
         singular = rng.normal(size=(n, n))
         singular[:, n // 2] = 0.0  # a zero column: some pivot is exactly 0
-        assert not _solve_in_place(singular, rng.normal(size=(n, 2)))
+        assert not solve_in_place(singular, rng.normal(size=(n, 2)))
