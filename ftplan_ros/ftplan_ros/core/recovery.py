@@ -260,29 +260,35 @@ def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, s
         neighbours[filled[tails[e]]] = heads[e]
         filled[tails[e]] += 1
 
-    # Dijkstra from the start.
+    # Dijkstra from the start, until it settles a goal node: the nearest, and among
+    # equally near ones the first in id order (the queue breaks ties by node).
+    at = np.minimum(np.searchsorted(goal, ids), max(len(goal) - 1, 0))
+    is_goal = np.zeros(len(ids), dtype=np.bool_)
+    if len(goal):
+        is_goal[:] = goal[at] == ids
     origin = len(ids) - 1
     distance = np.full(len(ids), np.inf)
     previous = np.full(len(ids), -1, dtype=np.int64)
     distance[origin] = 0.0
     queue = [(0.0, origin)]
+    best = -1
     while len(queue):
         reached, node = heapq.heappop(queue)
         if reached > distance[node]:
             continue
+        if is_goal[node]:
+            best = node
+            break
         for e in range(first[node], first[node + 1]):
             other = neighbours[e]
-            candidate = reached + np.sqrt(np.sum((points[other] - points[node]) ** 2)) + 1e-12
+            gap2 = 0.0
+            for a in range(n):
+                gap2 += (points[other, a] - points[node, a]) ** 2
+            candidate = reached + np.sqrt(gap2) + 1e-12
             if candidate < distance[other]:
                 distance[other] = candidate
                 previous[other] = node
                 heapq.heappush(queue, (candidate, other))
-    best = -1
-    at = np.minimum(np.searchsorted(goal, ids), max(len(goal) - 1, 0))
-    for node in range(len(ids)):
-        if len(goal) and goal[at[node]] == ids[node] and distance[node] < np.inf and \
-                (best < 0 or distance[node] < distance[best]):
-            best = node
     if best < 0:
         return np.empty((0, n))
     length = 1
