@@ -9,8 +9,6 @@ uses: none writes x - f(θ) itself.
 
 from __future__ import annotations
 
-import math
-import numbers
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol
@@ -20,6 +18,7 @@ import numpy as np
 from . import kernels
 from .errors import InputError
 from .geometry import Shape, transform
+from .validation import nonnegative
 
 # Takes a capsule's core segment from its local z axis onto the link's x axis.
 _Z_TO_X = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
@@ -137,11 +136,7 @@ class PlanarChain:
             raise InputError(
                 'robot.joint_limits',
                 f'{len(self.joint_limits)} limits for {len(self.link_lengths)} joints')
-        radius = self.link_radius
-        if isinstance(radius, bool) or not isinstance(radius, numbers.Real) or not (
-                math.isfinite(radius) and radius >= 0.0):  # negative: it would read as clearance
-            raise InputError('robot.link_radius',
-                             f'must be a finite radius >= 0 [m], got {self.link_radius!r}')
+        nonnegative(self.link_radius, 'robot.link_radius')  # negative: it would read as clearance
 
     @property
     def n_joints(self) -> int:

@@ -28,7 +28,15 @@ from .self_collision import default_disabled_pairs
 from .spatial import SpatialArm
 from .task_space import POINT_SIZE, unit_vector
 from .urdf import chain_from_urdf
-from .validation import LARGEST_NUMBER, check_keys, mapping, number, sequence, vector
+from .validation import (
+    LARGEST_NUMBER,
+    check_keys,
+    mapping,
+    nonnegative,
+    number,
+    sequence,
+    vector,
+)
 
 OBSTACLE_TYPES = ('sphere', 'box', 'cylinder')
 # [rad] Widest joint limit: a joint that turns further has no limit (it wraps).
@@ -320,10 +328,7 @@ def with_disabled_collisions(model: ChainModel, data: Any) -> ChainModel:
 
 
 def _link_radius(data: Mapping) -> float:
-    radius = number(data.get('link_radius', 0.0), 'robot.link_radius')
-    if radius < 0.0:
-        raise InputError('robot.link_radius', f'must be >= 0, got {radius}')
-    return radius
+    return nonnegative(data.get('link_radius', 0.0), 'robot.link_radius')
 
 
 def _joint_names(names: Any, n: int) -> list[str]:

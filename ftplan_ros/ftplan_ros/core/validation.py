@@ -56,6 +56,14 @@ def number(value: Any, where: str) -> float:
     return value
 
 
+def nonnegative(value: Any, where: str) -> float:
+    """Return `number` of the value, refusing one below 0 (a radius, say)."""
+    value = number(value, where)
+    if value < 0.0:
+        raise InputError(where, f'must be >= 0, got {value}')
+    return value
+
+
 def integer(value: Any, where: str, least: int | None = None) -> int:
     """Return an int (not a bool), at least `least`."""
     if isinstance(value, bool) or not isinstance(value, int):
