@@ -174,6 +174,11 @@ class FailureSurface:
         return ids
 
     @cached_property
+    def shared_points(self) -> np.ndarray:
+        """(P,) bool, by point id (`vertex_ids`): whether several vertices share the point."""
+        return np.bincount(self.vertex_ids) > 1
+
+    @cached_property
     def edge_ids(self) -> np.ndarray:
         """(E,) one number per distinct segment of `edges` (by the points it joins).
 
@@ -184,7 +189,7 @@ class FailureSurface:
         a, b = ids[self.edges[:, 0]], ids[self.edges[:, 1]]
         # Two edges join the same points only if one of them has an end whose point
         # another vertex shares: the other edges are distinct segments, numbered in turn.
-        shared = np.bincount(ids) > 1
+        shared = self.shared_points
         maybe = shared[a] | shared[b]
         segments = np.empty(len(a), dtype=np.int64)
         alone = int(np.count_nonzero(~maybe))

@@ -348,9 +348,8 @@ def _distinct_triangles(surface: FailureSurface) -> np.ndarray:
     (almost all of the paper's fan) are kept without sorting.
     """
     triangles = surface.triangles[surface.live_triangles]
-    ids = surface.vertex_ids
-    points = ids[triangles]
-    many = np.bincount(ids) > 1  # points that several vertices share
+    points = surface.vertex_ids[triangles]
+    many = surface.shared_points
     shared = many[points[:, 0]] | many[points[:, 1]] | many[points[:, 2]]
     keep = ~shared
     keep[np.flatnonzero(shared)[_distinct_sets(points[shared])]] = True
