@@ -15,6 +15,21 @@ def wrap_one(angle):
     return np.pi - (np.pi - angle) % (2.0 * np.pi)
 
 
+@numba.njit(cache=True)
+def wrap_steps(steps, periodic):
+    """Take steps (..., n) [rad] the shortest way round in their periodic components (n,).
+
+    Compiled, for kernels and for the many small steps of the trace and the sheet
+    builder; the steps are wrapped in place when they are contiguous, so pass a temporary.
+    """
+    out = np.ascontiguousarray(steps)
+    flat = out.reshape(-1)
+    for k in range(flat.shape[0]):
+        if periodic[k % periodic.shape[0]]:
+            flat[k] = wrap_one(flat[k])
+    return out
+
+
 def wrap_configuration(thetas: np.ndarray, periodic: np.ndarray) -> np.ndarray:
     """Wrap the periodic components of configurations (..., n) [rad] to (-π, π]."""
     thetas = np.asarray(thetas, dtype=float)

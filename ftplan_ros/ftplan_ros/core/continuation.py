@@ -13,7 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .angles import wrap_one
+from .angles import wrap_steps
 from .kernels import solve_in_place, task_residual
 
 # How a trace ended (the `status` of `trace_curve`).
@@ -23,16 +23,6 @@ STALLED = 2     # the step shrank below step_min
 TOO_LONG = 3    # max_points reached
 
 _NEWTON_ITERATIONS = 8
-
-
-@numba.njit(cache=True)
-def _wrapped_difference(a, b, periodic):
-    """Return a - b (n,), the shortest way round for periodic joints."""
-    diff = a - b
-    for k in range(diff.shape[0]):
-        if periodic[k]:
-            diff[k] = wrap_one(diff[k])
-    return diff
 
 
 @numba.njit(cache=True)
@@ -105,9 +95,9 @@ def trace_curve(kind, parameters, x, seed, tangent, periodic, lower, upper, step
         points[count] = theta
         count += 1
         if use_target and np.linalg.norm(
-                _wrapped_difference(target, theta, periodic)) <= step_max:
+                wrap_steps(target - theta, periodic)) <= step_max:
             return points[:count].copy(), OPEN, no_period
-        gap = _wrapped_difference(theta, seed, periodic)
+        gap = wrap_steps(theta - seed, periodic)
         if (travelled > 3.0 * step_max and np.linalg.norm(gap) < step_max
                 and tangent @ seed_tangent > min_turn):
             # Back at the seed: the closing chord to seed + period is shorter than a step.

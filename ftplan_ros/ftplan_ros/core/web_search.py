@@ -44,7 +44,7 @@ from dataclasses import replace
 import numba
 import numpy as np
 
-from .angles import wrap_angle, wrap_one
+from .angles import wrap_angle, wrap_steps
 from .cell_classes import disk_arrays, link_lever_arms, supports, triangle_free
 from .collision import CollisionChecker
 from .failure_surface import FailureSurface
@@ -272,7 +272,7 @@ def _nominal_path(grid: TolerantSet, theta_s: np.ndarray, cells: np.ndarray,
     periodic = lattice.periodic
     points = [np.asarray(theta_s, dtype=float)]
     for centre in list(lattice.centres(cells)) + [np.asarray(theta_g, dtype=float)]:
-        points.append(points[-1] + _step(centre - points[-1], periodic))
+        points.append(points[-1] + wrap_steps(centre - points[-1], periodic))
     points = np.array(points)
     offsets = (points - lattice.lower) / lattice.step
     gamma = points[_greedy_cuts(grid.certified_all, periodic, offsets, np.inf)]
@@ -331,20 +331,6 @@ def _lengthen_end(gamma: np.ndarray, extra: int) -> np.ndarray:
     a, b = gamma[-2], gamma[-1]
     t = np.arange(1, extra + 1)[:, None] / (extra + 1)
     return np.vstack([gamma[:-1], a + t * (b - a), b[None]])
-
-
-@numba.njit(cache=True)
-def _step(difference, periodic):
-    """Return the step (..., d) [rad] the shortest way round for periodic joints (d,).
-
-    Compiled, as the sheet builder takes thousands of steps of two or three angles.
-    """
-    out = np.ascontiguousarray(difference).copy()
-    flat = out.reshape(-1)
-    for k in range(flat.shape[0]):
-        if periodic[k % periodic.shape[0]]:
-            flat[k] = wrap_one(flat[k])
-    return out
 
 
 # Step 3: recovery sheets ----------------------------------------------------------------
@@ -460,8 +446,8 @@ class _SheetBuilder:
         hub = None
         for point in (0.5 * (ends[0] + ends[1]), ends[1], ends[0]):
             cell = self._cell2(point)
-            centre = point + _step(self.lower2 + (np.array(cell) + 0.5) * self.step2 - point,
-                                   self.periodic2)
+            centre = point + wrap_steps(
+                self.lower2 + (np.array(cell) + 0.5) * self.step2 - point, self.periodic2)
             if mask[cell] and self._fan_free(mask, j, centre):
                 hub = (cell, centre)
                 break
@@ -586,7 +572,7 @@ class _SheetBuilder:
     def _goal(self, index: int, level: float, near2: np.ndarray) -> np.ndarray:
         """Goal sample `index` at the locked value `level`, lifted next to `near2` (2,)."""
         theta = self.goal_points[index].copy()
-        theta[self.others] = near2 + _step(theta[self.others] - near2, self.periodic2)
+        theta[self.others] = near2 + wrap_steps(theta[self.others] - near2, self.periodic2)
         theta[self.joint] = level
         return theta
 
@@ -597,8 +583,8 @@ class _SheetBuilder:
         Also returns the cells (c, 2) the cut route passes through.
         """
         centres = self.lower2 + (path + 0.5) * self.step2
-        first = anchor + _step(centres[0] - anchor, self.periodic2)
-        steps = _step(np.diff(centres, axis=0), self.periodic2)
+        first = anchor + wrap_steps(centres[0] - anchor, self.periodic2)
+        steps = wrap_steps(np.diff(centres, axis=0), self.periodic2)
         lifted = first + np.vstack([np.zeros((1, 2)), np.cumsum(steps, axis=0)])
         return _shortcut(lifted, mask, self.lower2, self.step2, self.periodic2)
 
@@ -1003,7 +989,7 @@ def load_sheet_kernels() -> None:
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
     _route_cells(np.array([[0.0, 0.0], [1.0, 1.0]]), np.ones(2, dtype=np.bool_), 4)
     for difference in (np.zeros(2), np.zeros(3), np.zeros((2, 2))):
-        _step(difference, np.ones(difference.shape[-1], dtype=np.bool_))
+        wrap_steps(difference, np.ones(difference.shape[-1], dtype=np.bool_))
     _greedy_cuts(mask, grid.lattice.periodic, np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]), 16)
     _greedy_cuts(mask[0], grid.lattice.periodic[1:], np.array([[0.0, 0], [1, 1], [2, 2]]), 16)
     _triangle_free(mask[0], np.zeros(2), np.ones(2), np.array([0.0, 1.0]),
