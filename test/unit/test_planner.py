@@ -7,6 +7,8 @@ from ftplan_testing import SCENES, paper_scene
 from ftplan_ros.core import (
     CollisionChecker,
     InputError,
+    ManifoldCache,
+    PlannerOptions,
     load_scene,
     parse_scene,
     plan,
@@ -16,7 +18,7 @@ from ftplan_ros.core import (
 from ftplan_ros.core.brute_force import recoverable_in_plane
 from ftplan_ros.core.paths import densify, point_at_fraction
 from ftplan_ros.core.scene import Obstacle, Task
-from ftplan_ros.core.surface_search import straight_fans
+from ftplan_ros.core.surface_search import SurfaceSearch, straight_fans
 
 X_GOAL = np.array([1.0, 0.0])
 
@@ -91,6 +93,28 @@ def test_a_given_start_is_checked_not_replaced(fig3a):
     blocked = scene.with_obstacles([Obstacle('sphere', (*scene.robot.joint_positions(
         result.theta_s)[1], 0.0), radius=0.05)])
     assert not plan(blocked, start_configuration=result.theta_s).feasible
+
+
+class _NanChecker(CollisionChecker):
+    """A checker whose clearances are all NaN, as a broken distance would give."""
+
+    def clearance(self, thetas, needed=np.inf, refine=True):
+        return np.full_like(super().clearance(thetas, needed, refine), np.nan)
+
+
+def test_a_nan_clearance_reads_as_a_collision(fig3a):
+    """The search's own screens of θ_s and of the web's vertices fail closed on NaN."""
+    scene, result = fig3a
+    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(0),
+                           lambda line: None, ManifoldCache())
+    webs = []
+    build = search._fine_surface
+    search._fine_surface = lambda *args: webs.append(args) or build(*args)
+    assert search.run(result.theta_s).feasible and webs
+    assert search._given_start(result.theta_s).shape == (1, 3)
+    search.checker = _NanChecker(scene.robot, scene.obstacles)
+    assert search._fine_surface(*webs[-1]) is None
+    assert search._given_start(result.theta_s).shape == (0, 3)
 
 
 def test_infeasible_scene_says_why():

@@ -307,7 +307,7 @@ class SurfaceSearch:
         if on_manifold is None or np.max(np.abs(on_manifold - theta)) > 0.1:
             raise InputError('start_configuration', 'does not put the tool at task.start')
         on_manifold = wrap_configuration(on_manifold, robot.periodic)[None, :]
-        if self.checker.min_clearance(on_manifold, self.margin)[0] <= self.margin:
+        if not self.checker.min_clearance(on_manifold, self.margin)[0] > self.margin:  # or NaN
             return np.empty((0, robot.n_joints))
         return on_manifold
 
@@ -387,7 +387,7 @@ class SurfaceSearch:
                                         self.options.waypoint_spacing)
         clearance = self.checker.min_clearance(surface.vertices, self.margin).reshape(
             surface.paths.shape[:2])
-        if clearance.min() <= self.margin:
+        if not clearance.min() > self.margin:  # or NaN
             return None
         # Nominal path: the clearest, and among equally clear ones the shortest.
         lengths = np.linalg.norm(surface.goal_points - theta_s, axis=1)

@@ -440,9 +440,9 @@ class ExecutorNode(Node):
         return np.vstack([point_at_fraction(ex.command, fraction)[None, :], ahead])
 
     def _surface_meets_obstacle(self, surface: FailureSurface) -> bool:
-        """Whether a vertex of S_F touches the current obstacles."""
-        return bool(self._obstacles.checker.min_clearance(surface.vertices,
-                                                          needed=0.0).min() <= 0.0)
+        """Whether a vertex of S_F touches the current obstacles (or measures NaN)."""
+        return not self._obstacles.checker.min_clearance(surface.vertices,
+                                                         needed=0.0).min() > 0.0
 
     def _approach_planner(self) -> ApproachPlanner:
         """Return the core's approach planner over the scene and the current obstacles."""

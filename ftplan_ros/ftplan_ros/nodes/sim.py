@@ -488,7 +488,7 @@ class SimNode(Node):
         """Check samples (k, n) [rad] of the motion; a collision is measured exactly."""
         clearance = self._obstacles.checker.min_clearance(samples, needed=0.0)
         worst = int(np.argmin(clearance))
-        colliding = bool(clearance[worst] <= 0.0)
+        colliding = not clearance[worst] > 0.0  # a NaN clearance reads as a collision
         if colliding:
             self.min_clearance = min(self.min_clearance, float(clearance[worst]))
         for bound, q in zip(clearance.tolist(), samples, strict=True):
