@@ -234,21 +234,29 @@ def test_no_obstacles_means_infinite_clearance_and_checks_are_counted():
 
 def test_min_clearance_is_the_least_channel_and_keeps_a_nan():
     """The planar fast path and the general tiers: links placed by an angle, or a sum of
-    angles, that is not finite read NaN, never clear; one configuration gives one entry."""
+    angles, that is not finite read NaN, never clear, also with no obstacle near enough
+    to measure (none at all, or only culled ones); one configuration gives one entry."""
     rng = np.random.default_rng(5)
     disks = [Obstacle('sphere', (1.5, 0.1, 0.0), radius=0.2),
              Obstacle('sphere', (-0.5, 1.2, 0.0), radius=0.3)]
+    far = [Obstacle('sphere', (50.0, 0.0, 0.0), radius=0.1)]
     thetas = rng.uniform(-np.pi, np.pi, (200, 3))
     thetas[17, 1] = np.nan
     thetas[18, :2] = 1e308  # finite angles whose sum is not
-    planar, general = CollisionChecker(ARM, disks), CollisionChecker(ARM, disks, backend='fcl')
-    assert planar.planar_disks is not None and general.planar_disks is None
-    assert np.array_equal(np.isnan(planar.clearance(thetas)), np.isnan(general.clearance(thetas)))
-    for checker in (planar, general):
-        lowest = checker.min_clearance(thetas)
-        assert np.array_equal(lowest, checker.clearance(thetas).min(axis=1), equal_nan=True)
-        assert np.isnan(lowest[17:19]).all() and np.isfinite(np.delete(lowest, [17, 18])).all()
-        assert checker.min_clearance(thetas[3]).shape == (1,)
+    for obstacles in (disks, far, []):
+        planar = CollisionChecker(ARM, obstacles)
+        general = CollisionChecker(ARM, obstacles, backend='fcl')
+        assert planar.planar_disks is not None and general.planar_disks is None
+        assert np.array_equal(np.isnan(planar.clearance(thetas)),
+                              np.isnan(general.clearance(thetas)))
+        for checker in (planar, general):
+            lowest = checker.min_clearance(thetas)
+            assert np.array_equal(lowest, checker.clearance(thetas).min(axis=1), equal_nan=True)
+            assert np.isnan(lowest[17:19]).all() and not np.isnan(np.delete(lowest, [17, 18])).any()
+            assert checker.min_clearance(thetas[3]).shape == (1,)
+    # A spatial arm's pair channel; its frames compose rotations, so 1e308 stays finite.
+    pairs = CollisionChecker(folding_arm(), []).clearance(thetas[16:19])
+    assert np.isnan(pairs[1, -1]) and not np.isnan(pairs[[0, 2]]).any()
 
 
 def test_unknown_backend():

@@ -289,6 +289,11 @@ class CollisionChecker:
         out[:, :moving] = np.minimum(out[:, :moving], self._cap)
         if len(self._shape_pairs):
             out[:, moving:] = self._pair_channels(poses, needed[:, moving:], refine)
+        # A shape on a link whose frame is not finite reads NaN, even with no obstacle near.
+        finite = np.isfinite(frames).reshape(*frames.shape[:2], -1).all(axis=2)  # (N, L)
+        out[:, :moving][~finite[:, self._links[:moving]]] = np.nan
+        first, second = self._links[self._shape_pairs].T
+        out[:, moving:][~(finite[:, first] & finite[:, second])] = np.nan
         return out
 
     def _obstacle_channels(self, poses: np.ndarray, needed: np.ndarray, refine: bool,

@@ -434,13 +434,10 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
     A planar chain of links `lengths` (n,) [m] and capsule radius `link_radius` [m], at
     configurations `thetas` (N, n) [rad]; spheres of `centres` (P, 3) and `radii` (P,).
     A link whose end is not finite (placed by an angle, or a sum of angles, that is not)
-    reads NaN, as in the general tiers; without spheres every entry is +inf.
+    reads NaN, as in the general tiers; without spheres every other entry is +inf.
     """
     count, n = thetas.shape
     out = np.empty((count, n))
-    if centres.shape[0] == 0:  # nothing to measure: every link is infinitely clear
-        out[:] = np.inf
-        return out
     points = np.zeros((n + 1, 2))
     for q in range(count):
         planar_joint_points(lengths, thetas[q], points)
