@@ -340,3 +340,5 @@ def test_web_points_and_segments_are_numbered_by_their_coordinates():
         pairs = np.unique(np.stack([segments.reshape(-1), surface.edge_ids]), axis=1)
         assert pairs.shape[1] == segments.max(initial=-1) + 1, trial  # the same partition
         assert np.array_equal(np.unique(surface.edge_ids), np.arange(pairs.shape[1])), trial
+        assert (surface.point_count, surface.segment_count) == (points.max() + 1,
+                                                                 pairs.shape[1]), trial

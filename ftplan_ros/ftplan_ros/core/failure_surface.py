@@ -174,9 +174,24 @@ class FailureSurface:
         return ids
 
     @cached_property
+    def point_count(self) -> int:
+        """Number of distinct points: `vertex_ids` are 0..point_count - 1."""
+        return int(self.vertex_ids.max(initial=-1)) + 1
+
+    @cached_property
     def shared_points(self) -> np.ndarray:
         """(P,) bool, by point id (`vertex_ids`): whether several vertices share the point."""
         return np.bincount(self.vertex_ids) > 1
+
+    @cached_property
+    def segment_count(self) -> int:
+        """Number of distinct segments: `edge_ids` are 0..segment_count - 1."""
+        return int(self.edge_ids.max(initial=-1)) + 1
+
+    @cached_property
+    def is_finite(self) -> bool:
+        """Whether every point of the web is finite."""
+        return bool(np.isfinite(self.paths).all())
 
     @cached_property
     def edge_ids(self) -> np.ndarray:

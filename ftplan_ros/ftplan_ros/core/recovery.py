@@ -145,14 +145,14 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     path by more than `max_offset` [rad] (finite, >= 0) or a web point that is not finite.
     """
     theta = _checked_lock(surface, theta, joint, max_offset)
-    if not np.all(np.isfinite(surface.paths)):
+    if not surface.is_finite:
         raise InputError('surface', 'has a point that is not finite')
     segment, start = _locate(surface, theta, joint, max_offset)
     # S_F is sliced at the locked value moved into the path's range (by at most max_offset).
     slice_level = float(start[joint])
     point_of, segment_of = surface.vertex_ids, surface.edge_ids
-    n_points = int(point_of.max()) + 1
-    source = n_points + int(segment_of.max()) + 1  # the start's node id, above all others
+    n_points = surface.point_count
+    source = n_points + surface.segment_count  # the start's node id, above all others
     vertices = np.ascontiguousarray(surface.vertices, dtype=float)  # one compiled signature
     values = np.ascontiguousarray(vertices[:, joint])
     top = surface.goal_vertices

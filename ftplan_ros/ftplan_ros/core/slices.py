@@ -50,7 +50,7 @@ def _web_tables(surface: FailureSurface) -> tuple:
     """Distinct points and segments of the live triangles, goal marks, nominal sources."""
     point_of = surface.vertex_ids
     segment_of = surface.edge_ids
-    n_points = int(point_of.max()) + 1
+    n_points = surface.point_count
     live = surface.live_triangles
     corners = point_of[surface.triangles[live]]
     sides = segment_of[surface.triangle_edges[live]]
@@ -59,7 +59,7 @@ def _web_tables(surface: FailureSurface) -> tuple:
     _, first = np.unique(keys[:, 0] * n_points * n_points + keys[:, 1] * n_points + keys[:, 2],
                          return_index=True)
     corners, sides = corners[first], sides[first]
-    segment_ends = np.zeros((int(segment_of.max()) + 1, 2), dtype=np.int64)
+    segment_ends = np.zeros((surface.segment_count, 2), dtype=np.int64)
     segment_ends[segment_of] = point_of[surface.edges]
     n_waypoints = surface.paths.shape[1]
     goal_point = np.zeros(n_points, dtype=np.bool_)
