@@ -117,6 +117,19 @@ def test_a_nan_clearance_reads_as_a_collision(fig3a):
     assert search._given_start(result.theta_s).shape == (0, 3)
 
 
+def test_a_search_whose_webs_all_fail_to_build_says_so(fig3a):
+    """When no fine web is clear at its vertices, no surface was checked: the reason says
+    that, not that the check failed."""
+    scene, _ = fig3a
+    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(0),
+                           lambda line: None, ManifoldCache())
+    search._fine_surface = lambda *args: None
+    result = search.run()
+    assert not result.feasible
+    assert 'best failure surfaces proposed reached the self-check' in result.reason
+    assert 'check failed' not in result.reason
+
+
 def test_infeasible_scene_says_why():
     result = plan(load_scene(SCENES / 'infeasible.yaml'))
     assert not result.feasible

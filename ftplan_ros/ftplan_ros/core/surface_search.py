@@ -227,7 +227,7 @@ class SurfaceSearch:
                      ranking: _Ranking, stats: dict, theta_S: np.ndarray,
                      proposed: np.ndarray) -> _Search:
         """Self-check, best-ranked first: the first surface that passes wins."""
-        last_reason = 'every fine web hits an obstacle at a vertex'
+        last_reason = ''
         tried = 0
         ranked = ranking.best(self.options.max_verifications)
         for rank, proposal in enumerate(ranked, start=1):
@@ -253,6 +253,11 @@ class SurfaceSearch:
             last_reason = verdict.reason
             log.debug('surface rejected: %s', verdict.reason)
         stats['surfaces_tried'] = tried
+        if not tried:
+            return _Search(None, f'none of the {len(ranked)} best failure surfaces proposed '
+                           'reached the self-check: at full resolution each web hits an '
+                           'obstacle at a vertex or misses the failure plane of a joint',
+                           stats, theta_S, proposed)
         return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
                        f'{last_reason}', stats, theta_S, proposed)
 
