@@ -289,11 +289,14 @@ class CollisionChecker:
         out[:, :moving] = np.minimum(out[:, :moving], self._cap)
         if len(self._shape_pairs):
             out[:, moving:] = self._pair_channels(poses, needed[:, moving:], refine)
-        # A shape on a link whose frame is not finite reads NaN, even with no obstacle near.
-        finite = np.isfinite(frames).reshape(*frames.shape[:2], -1).all(axis=2)  # (N, L)
-        out[:, :moving][~finite[:, self._links[:moving]]] = np.nan
-        first, second = self._links[self._shape_pairs].T
-        out[:, moving:][~(finite[:, first] & finite[:, second])] = np.nan
+        # A shape placed by a frame that is not finite reads NaN, even with no obstacle near
+        # (its position is then not finite either: 0 * NaN is NaN).
+        placed = np.isfinite(poses[:, :, :3, 3])  # (N, S, 3)
+        if not placed.all():
+            placed = placed[..., 0] & placed[..., 1] & placed[..., 2]
+            out[:, :moving][~placed[:, :moving]] = np.nan
+            first, second = self._shape_pairs.T
+            out[:, moving:][~(placed[:, first] & placed[:, second])] = np.nan
         return out
 
     def _obstacle_channels(self, poses: np.ndarray, needed: np.ndarray, refine: bool,

@@ -438,6 +438,13 @@ def planar_link_clearances(lengths, link_radius, centres, radii, thetas):
     """
     count, n = thetas.shape
     out = np.empty((count, n))
+    if centres.shape[0] == 0:  # only ends that are not finite to find: no trigonometry
+        for q in range(count):
+            direction = 0.0
+            for k in range(n):
+                direction += thetas[q, k]  # once not finite, never finite again
+                out[q, k] = np.inf if np.isfinite(direction) else np.nan
+        return out
     points = np.zeros((n + 1, 2))
     for q in range(count):
         planar_joint_points(lengths, thetas[q], points)
