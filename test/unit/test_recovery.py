@@ -118,6 +118,9 @@ def test_bad_locks_are_rejected(plans):
     paths[-1, -1, 2] = np.inf
     with pytest.raises(InputError, match='surface: has a point that is not finite'):
         recover(replace(result.surface, paths=paths), theta, 0)
+    # What recover has learned of a surface (ids, counts, finiteness) cannot go stale.
+    with pytest.raises(ValueError, match='read-only'):
+        result.surface.paths[-1, -1, 2] = np.nan
 
 
 def test_a_repeated_waypoint_on_the_lock_level_gives_the_lock_point_itself():

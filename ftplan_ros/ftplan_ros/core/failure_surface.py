@@ -36,6 +36,13 @@ class FailureSurface:
     hit_paths: tuple[int, ...]
     tolerated: tuple[int, ...]
 
+    def __post_init__(self):
+        # The cached properties (ids, counts, finiteness) describe these points, so the
+        # surface holds them read-only: a read-only view of floats, the caller's array as is.
+        paths = np.asarray(self.paths, dtype=float).view()
+        paths.flags.writeable = False
+        object.__setattr__(self, 'paths', paths)
+
     @property
     def theta_s(self) -> np.ndarray:
         """The start configuration θ_s (n,) [rad]."""
