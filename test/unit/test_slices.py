@@ -8,6 +8,7 @@ nominal path's range, the midpoints between them, and dense samples of the nomin
 """
 
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -176,6 +177,11 @@ def test_the_paper_fan_recovers_every_lock():
         assert surface.paths[joint + 1, -1, joint] == THETA_S[joint]
         assert assert_agrees(surface, joint) == []
     assert slice_problem(surface, (0, 1, 2)) == ''
+    for bad in (np.nan, np.inf):
+        paths = surface.paths.copy()
+        paths[2, 3, 1] = bad
+        assert slice_problem(replace(surface, paths=paths), (0,)) == \
+            'the web has a point that is not finite'
 
 
 def test_a_fan_without_a_strip_names_the_level_it_cannot_recover():
