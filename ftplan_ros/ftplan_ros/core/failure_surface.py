@@ -21,6 +21,9 @@ import numpy as np
 
 from .failure_planes import FailurePlaneHit
 
+# What the checks of a web say when `FailureSurface.is_finite` is False.
+NOT_FINITE = 'the web has a point that is not finite'
+
 
 @dataclass(frozen=True, eq=False)
 class FailureSurface:

@@ -30,13 +30,13 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .failure_surface import FailureSurface
+from .failure_surface import NOT_FINITE, FailureSurface
 
 
 def slice_problem(surface: FailureSurface, joints) -> str:
     """Say where a lock of a joint in `joints` has no slice to the goal row, or ''."""
     if not surface.is_finite:  # comparisons with NaN would join nothing and find nothing
-        return 'the web has a point that is not finite'
+        return NOT_FINITE
     tables = _web_tables(surface)
     for joint in joints:
         level, where = _check_joint(surface.vertices[:, joint], *tables)

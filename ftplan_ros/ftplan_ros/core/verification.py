@@ -39,7 +39,7 @@ import numpy as np
 
 from .collision import CollisionChecker
 from .distance_kernels import link_clearance_over_box, planar_joint_points
-from .failure_surface import FailureSurface
+from .failure_surface import NOT_FINITE, FailureSurface
 from .paths import point_at_fraction
 from .recovery import recover
 from .robot import Robot, task_errors
@@ -248,9 +248,9 @@ def limits_problem(surface: FailureSurface, robot: Robot) -> str:
     The web's triangles and the recovery paths on them lie in the convex hull of its
     vertices, so vertices within the limits keep everything within them.
     """
+    if not surface.is_finite:
+        return NOT_FINITE
     vertices = surface.vertices
-    if not np.all(np.isfinite(vertices)):
-        return 'the web has a point that is not finite'
     limits = robot.limits
     outside = ~robot.periodic & ((vertices < limits[:, 0]) | (vertices > limits[:, 1])).any(axis=0)
     if outside.any():
