@@ -152,6 +152,7 @@ class CollisionChecker:
         self._placements = np.array([item.placement for item in items]).reshape(-1, 4, 4)
         self._moving = int(np.count_nonzero(self._links != 0))
         self.pairs = tuple(robot.self_collision_pairs)
+        self._lever_arms = None
         self._shape_pairs = np.array(
             [(s, t) for a, b in self.pairs for s in np.flatnonzero(self._links == a)
              for t in np.flatnonzero(self._links == b)], dtype=np.int64).reshape(-1, 2)
@@ -191,8 +192,15 @@ class CollisionChecker:
         origin (`Robot.frame_lever_arms`); for spheres and capsules, whose distances are
         their cores' minus the radius, the extent of the core. For a pair of shapes on
         links a < b, only joints that turn b and not a change the distance: joints
-        a..b-1, with the arms of b's shape.
+        a..b-1, with the arms of b's shape. Computed once (the shapes are fixed) and
+        returned read-only.
         """
+        if self._lever_arms is None:
+            self._lever_arms = self._compute_lever_arms()
+            self._lever_arms.flags.writeable = False
+        return self._lever_arms
+
+    def _compute_lever_arms(self) -> np.ndarray:
         frame = self.robot.frame_lever_arms()
         n = self.robot.n_joints
         turns = self._turns()
