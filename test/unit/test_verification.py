@@ -7,13 +7,11 @@ import pytest
 from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker, plan
+from ftplan_ros.core.certification import LARGEST_ANGLE, _distinct_triangles, certify_simplices
 from ftplan_ros.core.failure_surface import FailureSurface
 from ftplan_ros.core.robot import PlanarChain
 from ftplan_ros.core.scene import Obstacle, Task
 from ftplan_ros.core.verification import (
-    LARGEST_ANGLE,
-    _distinct_triangles,
-    certify_simplices,
     certify_surface,
     goal_row_error,
     structure_problem,
@@ -101,7 +99,8 @@ def test_the_triangles_certified_cover_every_triangle_of_the_web():
             paths[2] = paths[1]  # a cut: a repeated path
         surface = FailureSurface(paths, 0, (), (0,))
         ids = surface.vertex_ids
-        kept = [frozenset(ids[t]) for t in _distinct_triangles(surface)]
+        kept = [frozenset(ids[t]) for t in _distinct_triangles(
+            surface, np.flatnonzero(surface.live_triangles))]
         proper = [k for k in kept if len(k) == 3]
         assert len(proper) == len(set(proper)), trial
         for triangle in surface.triangles[surface.live_triangles]:

@@ -22,7 +22,7 @@ module plans those ordinary motions; none of them is failure-tolerant (issue 10)
 
 Every path returned is certified collision-free over the continuum, not only at its
 samples: its segments, cut to at most `certify_step` [rad], pass
-`verification.certify_simplices` with the margin. Paths are (k, n) [rad], lifted
+`certification.certify_polylines` with the margin. Paths are (k, n) [rad], lifted
 (continuous), starting at q.
 """
 
@@ -38,6 +38,7 @@ from functools import cached_property
 import numpy as np
 
 from .angles import configuration_difference
+from .certification import certify_polylines
 from .collision import CollisionChecker
 from .free_components import GRID_CELLS, FreeComponents
 from .manifolds import (
@@ -53,7 +54,6 @@ from .planner import plan
 from .result import PlanResult
 from .robot import Robot, task_errors
 from .scene import Scene
-from .verification import certify_simplices
 
 log = logging.getLogger(__name__)
 
@@ -312,8 +312,7 @@ class ApproachPlanner:
         dense = densify(path, self.options.certify_step)
         if len(dense) < 2:
             return self._valid(dense[0], 0.0)
-        corners = np.stack([dense[:-1], dense[1:]], axis=1)
-        ok, _, _, _ = certify_simplices(self.checker, corners, self.options.margin,
+        ok, _, _, _ = certify_polylines(self.checker, [dense], self.options.margin,
                                         self.options.certify_depth)
         return bool(ok)
 

@@ -1,0 +1,190 @@
+"""Certifying webs and polylines in blocks: against dense sampling, and triangle by triangle."""
+
+import numpy as np
+import pytest
+
+from ftplan_ros.core import CollisionChecker
+from ftplan_ros.core.certification import (
+    LARGEST_ANGLE,
+    _distinct_triangles,
+    certify_polylines,
+    certify_simplices,
+    certify_web,
+)
+from ftplan_ros.core.failure_surface import FailureSurface
+from ftplan_ros.core.robot import PlanarChain
+from ftplan_ros.core.scene import Obstacle
+
+ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=0.05)
+
+
+def random_web(rng, paths=12, waypoints=20):
+    """A fan as the paper builds it: straight paths from θ_s to the points of a curved arc."""
+    theta_s = rng.uniform(-np.pi, np.pi, 3)
+    t = np.linspace(0.0, 1.0, paths)[:, None]
+    arc = theta_s + rng.uniform(-1.0, 1.0, 3) + t * rng.uniform(-0.8, 0.8, 3) + \
+        t ** 2 * rng.uniform(-0.4, 0.4, 3)
+    fractions = np.linspace(0.0, 1.0, waypoints)[None, :, None]
+    web = theta_s + fractions * (arc - theta_s)[:, None, :]
+    web[:, 0] = theta_s
+    return web
+
+
+def random_disks(rng, count=3):
+    return [Obstacle('sphere', (*rng.uniform(-2.5, 2.5, 2), 0.0), radius=rng.uniform(0.1, 0.4))
+            for _ in range(count)]
+
+
+def triangle_points(corners, count=12):
+    """Barycentric grid points (m, n) of triangles (T, 3, n), their corners included."""
+    weights = np.array([(i, j, count - i - j) for i in range(count + 1)
+                        for j in range(count + 1 - i)], dtype=float) / count
+    return np.einsum('wk,tkn->twn', weights, corners).reshape(-1, corners.shape[-1])
+
+
+def live_corners(surface):
+    triangles = surface.triangles[surface.live_triangles]
+    return surface.vertices[triangles]
+
+
+@pytest.mark.parametrize('backend', ['auto', 'fcl'])
+def test_a_certified_web_never_collides_and_blocks_lose_nothing(backend):
+    """Sound against dense sampling; certifies every web that triangle by triangle does.
+
+    Triangle by triangle (the certificate before blocks) is run on every live triangle.
+    Blocks can only add certified webs: a block that is not certified is split down to
+    the same triangles, and a block stops the check only at a vertex that is not clear,
+    which no triangle through it can certify. The fcl backend runs the general measure.
+    """
+    rng = np.random.default_rng(21)
+    outcomes, blocked = set(), 0
+    for trial in range(40):
+        checker = CollisionChecker(ARM, random_disks(rng), backend=backend)
+        assert (checker.planar_disks is None) == (backend == 'fcl')
+        surface = FailureSurface(random_web(rng), 0, (), (0,))
+        margin = 0.0 if trial % 2 else 0.05
+        ok, where, smallest, samples = certify_web(checker, surface, margin, 5)
+        corners = live_corners(surface)
+        by_triangle = certify_simplices(checker, corners, margin, 5)
+        assert ok or not by_triangle[0], trial
+        if ok:
+            assert checker.min_clearance(triangle_points(corners)).min() > margin, trial
+            assert where == (-1, -1) and np.isfinite(smallest) and smallest > margin
+            blocked += samples < len(corners)
+        else:
+            path, waypoint = where
+            assert 0 <= path < surface.paths.shape[0] and 0 <= waypoint < surface.paths.shape[1]
+        outcomes.add(ok)
+    assert outcomes == {True, False} and blocked > 5
+
+
+def test_a_web_refusal_names_a_vertex_near_the_collision():
+    """A disk on the elbow at one vertex: the vertex named is at a triangle that hits it."""
+    rng = np.random.default_rng(4)
+    for trial in range(10):
+        surface = FailureSurface(random_web(rng), 0, (), (0,))
+        elbow = ARM.joint_positions(surface.paths[rng.integers(12), rng.integers(20)])[2]
+        checker = CollisionChecker(ARM, [Obstacle('sphere', (*elbow, 0.0), radius=0.1)])
+        ok, (path, waypoint), smallest, _ = certify_web(checker, surface, 0.0, 5)
+        assert not ok and smallest < 0.0, trial
+        vertex = path * surface.paths.shape[1] + waypoint
+        around = surface.triangles[np.any(surface.triangles == vertex, axis=1)]
+        nearest = checker.min_clearance(triangle_points(surface.vertices[around])).min()
+        assert nearest < 0.01, trial
+
+
+def test_a_web_with_cut_strips_and_padding_is_covered():
+    """Repeated paths (cuts) and padded columns: every live triangle is certified or refused.
+
+    A disk placed on a live triangle's centroid must make the web fail; placed on a
+    triangle of a dead strip only (between a repeated path and the next), the web may pass.
+    """
+    rng = np.random.default_rng(9)
+    for trial in range(30):
+        paths = random_web(rng, paths=14, waypoints=18)
+        paths[5] = paths[4]  # a cut: no quads join path 5 to path 6
+        paths[10, 12:] = paths[10, 11]  # a padded column
+        surface = FailureSurface(paths, 0, (), (0,))
+        triangles = np.flatnonzero(surface.live_triangles)
+        target = surface.vertices[surface.triangles[rng.choice(triangles)]].mean(axis=0)
+        tip = ARM.joint_positions(target)[-1]
+        checker = CollisionChecker(ARM, [Obstacle('sphere', (*tip, 0.0), radius=0.05)])
+        assert not certify_web(checker, surface, 0.0, 5)[0], trial
+
+
+def test_polylines_are_sound_and_the_refusal_names_the_polyline():
+    rng = np.random.default_rng(5)
+    obstacles = random_disks(rng, 4)
+    checker = CollisionChecker(ARM, obstacles)
+    outcomes = set()
+    for trial in range(60):
+        lines = [np.cumsum(np.vstack([rng.uniform(-np.pi, np.pi, 3),
+                                      rng.uniform(-0.05, 0.05, (int(rng.integers(1, 40)), 3))]),
+                           axis=0) for _ in range(int(rng.integers(1, 5)))]
+        ok, (line, point), smallest, samples = certify_polylines(checker, lines, 0.0, 6)
+        segments = [np.stack([p[:-1], p[1:]], axis=1) for p in lines if len(p) > 1]
+        singles = [np.stack([p, p], axis=1) for p in lines if len(p) == 1]
+        corners = np.concatenate(segments + singles)
+        assert ok or not certify_simplices(checker, corners, 0.0, 6)[0], trial
+        if ok:
+            dense = corners[:, :1] + np.linspace(0.0, 1.0, 30)[None, :, None] * \
+                (corners[:, 1:] - corners[:, :1])
+            assert checker.min_clearance(dense.reshape(-1, 3)).min() > 0.0, trial
+        else:
+            assert 0 <= line < len(lines) and 0 <= point < len(lines[line])
+        outcomes.add(ok)
+    assert outcomes == {True, False}
+
+
+def test_the_polyline_that_collides_is_the_one_named():
+    clear = np.array([[0.0, 0.0, 0.0], [0.2, 0.1, 0.0], [0.4, 0.2, 0.1]])
+    through = np.array([[1.0, 0.5, 0.0], [1.5, 0.5, 0.0], [2.0, 0.5, 0.0]])
+    tip = ARM.joint_positions(through[1])[-1]
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (*tip, 0.0), radius=0.05)])
+    assert certify_polylines(checker, [clear, clear], 0.0, 6)[0]
+    ok, (line, point), _, _ = certify_polylines(checker, [clear, through, clear], 0.0, 6)
+    assert not ok and line == 1 and point in (0, 1, 2)
+    # A polyline of one point is that point; the junction between two polylines is not a
+    # segment of either, so it is never measured.
+    assert not certify_polylines(checker, [clear, through[1:2]], 0.0, 6)[0]
+    assert certify_polylines(checker, [through[:1], through[2:]], 0.0, 6)[0] == \
+        certify_simplices(checker, np.stack([through[[0, 2]], through[[0, 2]]], axis=1),
+                          0.0, 6)[0]
+    assert certify_polylines(checker, [], 0.0, 6) == (True, (-1, -1), np.inf, 0)
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf, 2.0 * LARGEST_ANGLE])
+def test_points_that_are_not_finite_or_too_large_fail_unmeasured(bad):
+    checker = CollisionChecker(ARM, [])
+    paths = random_web(np.random.default_rng(1))
+    paths[3, 7, 1] = bad
+    ok, where, smallest, samples = certify_web(checker, FailureSurface(paths, 0, (), (0,)),
+                                               0.0, 5)
+    assert not ok and where == (3, 7) and np.isnan(smallest) and samples == 0
+    line = np.zeros((5, 3))
+    line[2, 0] = bad
+    ok, where, _, samples = certify_polylines(checker, [np.ones((2, 3)), line], 0.0, 5)
+    assert not ok and where == (1, 2) and samples == 0
+
+
+def test_a_web_of_one_path_or_of_single_points_is_certified_along_what_it_has():
+    path = np.array([0.0, 0.5, 0.5]) + np.linspace(0.0, 1.0, 30)[:, None] * [0.0, 0.5, 0.7]
+    elbow = ARM.joint_positions(path[20])[2]
+    blocked = CollisionChecker(ARM, [Obstacle('sphere', (*elbow, 0.0), radius=0.1)])
+    ok, (k, w), _, _ = certify_web(blocked, FailureSurface(path[None], 0, (0,), (0,)), 0.0, 5)
+    assert not ok and k == 0 and abs(w - 20) <= 8
+    assert certify_web(CollisionChecker(ARM, []), FailureSurface(path[None], 0, (0,), (0,)),
+                       0.0, 5)[0]
+    points = path[::10, None, :]  # three paths of one waypoint each
+    ok, where, _, _ = certify_web(blocked, FailureSurface(points, 0, (0,), (0,)), 0.0, 5)
+    hit = blocked.min_clearance(points[:, 0]) <= 0.0
+    assert ok == (not hit.any())
+
+
+def test_distinct_triangles_of_a_subset_stay_in_the_subset():
+    rng = np.random.default_rng(2)
+    surface = FailureSurface(random_web(rng), 0, (), (0,))
+    chosen = rng.choice(len(surface.triangles), 40, replace=False)
+    kept = _distinct_triangles(surface, chosen)
+    assert {tuple(t) for t in kept} <= {tuple(t) for t in surface.triangles[chosen]}
+    assert len(_distinct_triangles(surface, np.zeros(0, dtype=np.int64))) == 0
