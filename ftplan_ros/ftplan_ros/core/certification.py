@@ -13,7 +13,9 @@ limit; a measured point that is not clear fails the certificate.
   (path by waypoint), so blocks of 8 x 8 quads are measured first, at a vertex of the web
   in the block's middle against the box of the block's vertices, and split into four
   until single quads are left, whose triangles go to `certify_simplices`. Most of a web
-  is far from every obstacle and is certified in a few blocks.
+  is far from every obstacle and is certified in a few blocks. (A web of one sheet, for a
+  planar chain among spheres, whose clearance is one cheap exact pass; otherwise
+  triangles from the start, as before.)
 * `certify_polylines`: every segment of some polylines (recovery paths, moves), in
   blocks of 8 segments first, the same way.
 """
@@ -89,7 +91,12 @@ def certify_web(checker: CollisionChecker, surface: FailureSurface, margin: floa
         return certify_polylines(checker, list(paths), margin, max_depth)
     rows, columns = paths.shape[0] - 1, paths.shape[1] - 1  # quads of the grid
     live = np.repeat(~surface.cuts[:, None], columns, axis=1)
-    where, (top, left), smallest, samples = _certify_blocks(checker, paths, live, margin)
+    # A web of several sheets pads its columns and repeats paths: most of its quads are
+    # copies or segments (23,108 live triangles, 3,000 distinct point sets on seed 1's
+    # crowded 0), which the triangles' dedupe drops and blocks would measure.
+    first = _first_block(checker) if not surface.cuts.any() else 1
+    where, (top, left), smallest, samples = _certify_blocks(checker, paths, live, margin,
+                                                            first)
     if where[0] >= 0:
         return False, where, smallest, samples
     quads = top * columns + left
@@ -127,7 +134,8 @@ def certify_polylines(checker: CollisionChecker, polylines: list[np.ndarray], ma
                                                        axis=1))[0])), np.nan, 0
     live = np.ones((1, len(row) - 1), dtype=bool)
     live[0, firsts[1:-1] - 1] = False  # from one polyline's last point to the next's first
-    where, (_, left), smallest, samples = _certify_blocks(checker, row[None], live, margin)
+    where, (_, left), smallest, samples = _certify_blocks(checker, row[None], live, margin,
+                                                          _first_block(checker))
     if where[0] >= 0:
         return False, owner(where[1]), smallest, samples
     ok, failed, least, count = certify_simplices(
@@ -141,17 +149,29 @@ def _measurable(points: np.ndarray) -> bool:
     return bool(np.abs(points).max(initial=0.0) <= LARGEST_ANGLE)  # False for NaN
 
 
+def _first_block(checker: CollisionChecker) -> int:
+    """Cells a side of the first blocks: `_FIRST_BLOCK`, or 1 (no blocks) for most checkers.
+
+    Only a checker that measures in one exact compiled pass (a planar chain among
+    spheres, `CollisionChecker.planar_disks`) gets blocks. Elsewhere a block's large
+    spread asks for exact distances of many more pairs (fcl) than a triangle's, and blocks
+    did not pay on the Panda and iiwa scenes.
+    """
+    return _FIRST_BLOCK if checker.planar_disks is not None else 1
+
+
 def _certify_blocks(checker: CollisionChecker, grid: np.ndarray, live: np.ndarray,
-                    margin: float) -> tuple[tuple[int, int], tuple[np.ndarray, np.ndarray],
-                                            float, int]:
+                    margin: float, first: int) -> tuple[tuple[int, int],
+                                                        tuple[np.ndarray, np.ndarray],
+                                                        float, int]:
     """Certify blocks of the cells of a grid of points (R+1, C+1, n) or (1, C+1, n) [rad].
 
     Cell (r, c) has corners (r, c) and (r+1, c+1) (a segment of the one row, for a grid
     of one row); `live` (R, C) or (1, C) says which cells must be certified. Blocks of
-    `_FIRST_BLOCK` cells a side are measured at their middle point, against the box of
-    their points, and the blocks left open are split in four (in two along one row)
-    until single cells are left. Returns the (row, column) of a measured point that is
-    not clear by more than `margin` [m] (else (-1, -1)), the (top, left) of the live
+    `first` cells a side (a power of two) are measured at their middle point, against the
+    box of their points, and the blocks left open are split in four (in two along one
+    row) until single cells are left. Returns the (row, column) of a measured point that
+    is not clear by more than `margin` [m] (else (-1, -1)), the (top, left) of the live
     cells left, the smallest clearance measured [m] and the number of measurements.
     """
     arms = checker.lever_arms()
@@ -159,7 +179,7 @@ def _certify_blocks(checker: CollisionChecker, grid: np.ndarray, live: np.ndarra
     last_row = grid.shape[0] - 1
     live_before = np.zeros((rows + 1, columns + 1), dtype=np.int64)  # summed-area table
     live_before[1:, 1:] = np.cumsum(np.cumsum(live, axis=0), axis=1)
-    size = _FIRST_BLOCK
+    size = first
     top, left = (corner.ravel() for corner in np.meshgrid(
         np.arange(0, rows, size), np.arange(0, columns, size), indexing='ij'))
     smallest, samples = np.inf, 0
