@@ -59,14 +59,22 @@ def test_a_certified_web_never_collides_and_blocks_lose_nothing(backend):
     """
     rng = np.random.default_rng(21)
     outcomes, blocked = set(), 0
-    for trial in range(40):
+    for trial in range(60):
         checker = CollisionChecker(ARM, random_disks(rng), backend=backend)
         assert (checker.planar_disks is None) == (backend == 'fcl')
-        surface = FailureSurface(random_web(rng), 0, (), (0,))
+        paths = random_web(rng)
+        if trial % 3 == 0:  # padded columns: quads that are segments, beside proper ones
+            for k in rng.choice(len(paths), 4, replace=False):
+                end = int(rng.integers(2, paths.shape[1]))
+                paths[k, end:] = paths[k, end - 1]
+        surface = FailureSurface(paths, 0, (), (0,))
         margin = 0.0 if trial % 2 else 0.05
-        ok, where, smallest, samples = certify_web(checker, surface, margin, 5)
+        depth = 5 if trial % 4 else 2
+        ok, where, smallest, samples = certify_web(checker, surface, margin, depth)
         corners = live_corners(surface)
-        by_triangle = certify_simplices(checker, corners, margin, 5)
+        # The certificate before blocks: every distinct live triangle, with the same depth.
+        by_triangle = certify_simplices(checker, surface.vertices[_distinct_triangles(
+            surface, np.flatnonzero(surface.live_triangles))], margin, depth)
         assert ok or not by_triangle[0], trial
         if ok:
             assert checker.min_clearance(triangle_points(corners)).min() > margin, trial
@@ -176,7 +184,8 @@ def test_a_web_of_one_path_or_of_single_points_is_certified_along_what_it_has():
     elbow = ARM.joint_positions(path[20])[2]
     blocked = CollisionChecker(ARM, [Obstacle('sphere', (*elbow, 0.0), radius=0.1)])
     ok, (k, w), _, _ = certify_web(blocked, FailureSurface(path[None], 0, (0,), (0,)), 0.0, 5)
-    assert not ok and k == 0 and abs(w - 20) <= 8
+    segment = path[w] + np.linspace(0.0, 1.0, 50)[:, None] * (path[w + 1] - path[w])
+    assert not ok and k == 0 and blocked.min_clearance(segment).min() < 0.01
     assert certify_web(CollisionChecker(ARM, []), FailureSurface(path[None], 0, (0,), (0,)),
                        0.0, 5)[0]
     points = path[::10, None, :]  # three paths of one waypoint each
@@ -185,10 +194,64 @@ def test_a_web_of_one_path_or_of_single_points_is_certified_along_what_it_has():
     assert ok == (not hit.any())
 
 
-def test_distinct_triangles_of_a_subset_stay_in_the_subset():
+def test_the_triangles_kept_among_some_are_those_the_whole_web_keeps():
+    """Dedupe is over the whole web, then restricted: what blocks leave keeps no extra copy.
+
+    A copy or a segment whose covering triangle lies in a certified block is left out,
+    as it was when every triangle was certified one by one (a helper found a web the
+    certificate rejected because a block's leftovers were deduped among themselves only).
+    """
     rng = np.random.default_rng(2)
-    surface = FailureSurface(random_web(rng), 0, (), (0,))
-    chosen = rng.choice(len(surface.triangles), 40, replace=False)
-    kept = _distinct_triangles(surface, chosen)
-    assert {tuple(t) for t in kept} <= {tuple(t) for t in surface.triangles[chosen]}
+    for trial in range(40):
+        paths = random_web(rng, paths=10, waypoints=8)
+        paths[int(rng.integers(2, 10))] = paths[int(rng.integers(1, 9))]
+        paths[int(rng.integers(10)), 5:] = paths[0, 4]
+        surface = FailureSurface(paths, 0, (), (0,))
+        live = np.flatnonzero(surface.live_triangles)
+        whole = {tuple(t) for t in _distinct_triangles(surface, live)}
+        chosen = rng.choice(live, len(live) // 3, replace=False)
+        kept = [tuple(t) for t in _distinct_triangles(surface, chosen)]
+        assert kept == [tuple(t) for t in surface.triangles[chosen] if tuple(t) in whole], trial
     assert len(_distinct_triangles(surface, np.zeros(0, dtype=np.int64))) == 0
+
+
+def test_empty_polylines_hold_nothing_and_hide_nothing():
+    """A polyline of no points certifies nothing, and the others are still checked."""
+    through = np.array([[1.0, 0.5, 0.0], [1.5, 0.5, 0.0], [2.0, 0.5, 0.0]])
+    tip = ARM.joint_positions(through[1])[-1]
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (*tip, 0.0), radius=0.05)])
+    empty = np.zeros((0, 3))
+    assert certify_polylines(checker, [empty], 0.0, 6)[0]
+    for lines, named in (([empty, through], 1), ([through, empty], 0),
+                         ([empty, through[:1], empty, through], 3)):
+        ok, (line, _), _, _ = certify_polylines(checker, lines, 0.0, 6)
+        assert not ok and line == named, lines
+
+
+@pytest.mark.parametrize('shape', [(4, 5, 2), (4, 5, 4), (4, 0, 3), (0, 5, 3)])
+def test_a_web_of_the_wrong_shape_is_refused(shape):
+    """Angles for another arm would be read past their end by the compiled pass."""
+    with pytest.raises(ValueError, match='web'):
+        certify_web(CollisionChecker(ARM, random_disks(np.random.default_rng(0))),
+                    FailureSurface(np.zeros(shape), 0, (), (0,)), 0.0, 5)
+
+
+@pytest.mark.parametrize('line', [np.zeros(3), np.zeros((4, 2)), np.zeros((2, 4, 3))])
+def test_a_polyline_or_simplices_of_the_wrong_shape_are_refused(line):
+    checker = CollisionChecker(ARM, random_disks(np.random.default_rng(0)))
+    with pytest.raises(ValueError, match='polyline'):
+        certify_polylines(checker, [line], 0.0, 5)
+    with pytest.raises(ValueError, match='corners'):
+        certify_simplices(checker, np.zeros((2, 2, 2)), 0.0, 5)
+
+
+def test_the_lever_arms_a_caller_changes_are_its_own():
+    """Certification relies on the checker's lever arms: a caller's copy cannot change them."""
+    through = np.array([[[1.0, 0.3, 0.0], [1.0, 0.7, 0.0]]])
+    tip = ARM.joint_positions(through[0].mean(axis=0))[-1]
+    checker = CollisionChecker(ARM, [Obstacle('sphere', (*tip, 0.0), radius=0.05)])
+    expected = checker.lever_arms()
+    arms = checker.lever_arms()
+    arms[:] = 0.0
+    assert np.array_equal(checker.lever_arms(), expected) and expected.max() > 0.0
+    assert not certify_simplices(checker, through, 0.0, 6)[0]

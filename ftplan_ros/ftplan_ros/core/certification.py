@@ -13,11 +13,11 @@ limit; a measured point that is not clear fails the certificate.
   (path by waypoint), so blocks of 8 x 8 quads are measured first, at a vertex of the web
   in the block's middle against the box of the block's vertices, and split into four
   until single quads are left, whose triangles go to `certify_simplices`. Most of a web
-  is far from every obstacle and is certified in a few blocks. (A web of one sheet, for a
-  planar chain among spheres, whose clearance is one cheap exact pass; otherwise
-  triangles from the start, as before.)
-* `certify_polylines`: every segment of some polylines (recovery paths, moves), in
-  blocks of 8 segments first, the same way.
+  is far from every obstacle and is certified in a few blocks; every vertex is then
+  measured exactly, for the smallest clearance reported. Only for a web of one sheet and
+  a planar chain among spheres, whose clearance is one cheap exact pass (see
+  `certify_web`); otherwise triangle by triangle from the start.
+* `certify_polylines`: every segment of some polylines (recovery paths, moves).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ _ROUNDING = 1e-6
 # than _ROUNDING (at 1e17 rad the arm's computed pose jumps by whole radians) and sums of
 # corners overflow. A web is lifted a few turns at most.
 LARGEST_ANGLE = 1e3
-# Quads per side of a web's first blocks: a power of two, halved at each level.
+# Quads a side of a web's first blocks: a power of two, halved at each level.
 _FIRST_BLOCK = 8
 
 
@@ -47,8 +47,10 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
     `corners` (S, c, n) [rad] are segments (c = 2) or triangles (c = 3) in joint space.
     Returns (ok, index of the first simplex that failed or -1, smallest clearance sampled
     [m], number of clearance samples). A simplex with a corner that is not finite or lies
-    beyond `LARGEST_ANGLE` fails unmeasured.
+    beyond `LARGEST_ANGLE` fails unmeasured. Raises ValueError for corners that are not
+    (S, c, n) with n the robot's joints.
     """
+    corners = _checked(checker, corners, 3, 'corners')
     arms = checker.lever_arms()
     roots = np.arange(len(corners))
     smallest = np.inf
@@ -76,30 +78,48 @@ def certify_web(checker: CollisionChecker, surface: FailureSurface, margin: floa
                 max_depth: int) -> tuple[bool, tuple[int, int], float, int]:
     """Certify that every live triangle of the web (`FailureSurface.triangles`) is clear.
 
-    Blocks of quads first, then the triangles of the quads left (module docstring); each
-    triangle may still be split `max_depth` times. Returns (ok, (path, waypoint) of a
-    vertex where it failed or (-1, -1), smallest clearance sampled [m], number of
-    clearance samples). Every point sampled lies on the web. A web with a point that is
-    not finite or lies beyond `LARGEST_ANGLE` fails unmeasured. A web without quads is
-    certified along its one path, or at its points (one waypoint per path).
+    Blocks of quads first where they pay, then the triangles of the quads left (module
+    docstring); each triangle may still be split `max_depth` times. Returns (ok, (path,
+    waypoint) of a vertex where it failed or (-1, -1), smallest clearance measured [m],
+    number of clearance samples). Every point measured lies on the web; with blocks, every
+    vertex is measured too (one that is not clear fails the web), so that the smallest
+    clearance is taken as densely as the triangles alone would take it. A web with a
+    point that is not finite or lies beyond `LARGEST_ANGLE` fails unmeasured. A web
+    without quads is certified along its one path, or at its points (one waypoint per
+    path). Raises ValueError for a web that is not (K, W+1, n), K, W+1 >= 1, with n the
+    robot's joints.
     """
-    paths = surface.paths
+    paths = _checked(checker, surface.paths, 3, 'the web')
+    if not paths.shape[0] or not paths.shape[1]:
+        raise ValueError(f'the web must have a path and a waypoint, got shape {paths.shape}')
     if not _measurable(paths):
         beyond = ~np.all(np.abs(paths) <= LARGEST_ANGLE, axis=2)  # True for NaN too
         return False, tuple(int(i) for i in np.argwhere(beyond)[0]), np.nan, 0
     if paths.shape[1] == 1 or len(paths) == 1:  # paths of one point, or one path
         return certify_polylines(checker, list(paths), margin, max_depth)
     rows, columns = paths.shape[0] - 1, paths.shape[1] - 1  # quads of the grid
-    live = np.repeat(~surface.cuts[:, None], columns, axis=1)
-    # A web of several sheets pads its columns and repeats paths: most of its quads are
-    # copies or segments (23,108 live triangles, 3,000 distinct point sets on seed 1's
-    # crowded 0), which the triangles' dedupe drops and blocks would measure.
-    first = _first_block(checker) if not surface.cuts.any() else 1
-    where, (top, left), smallest, samples = _certify_blocks(checker, paths, live, margin,
-                                                            first)
-    if where[0] >= 0:
-        return False, where, smallest, samples
-    quads = top * columns + left
+    smallest, samples = np.inf, 0
+    top, left = (corner.ravel() for corner in np.meshgrid(np.arange(rows), np.arange(columns),
+                                                          indexing='ij'))
+    # Blocks pay for a planar chain among spheres, measured in one exact compiled pass:
+    # elsewhere a block's large spread asks for exact distances of many more pairs (fcl)
+    # than a triangle's (the Panda's self-check took 3x as long). And not on a web of
+    # several sheets: it pads columns and repeats paths, so most of its quads are copies
+    # or segments (seed 1's crowded 0: 23,108 live triangles, 3,000 distinct point sets)
+    # that the triangles' dedupe drops and blocks would measure.
+    if checker.planar_disks is not None and not surface.cuts.any():
+        where, (top, left), smallest, samples = _certify_blocks(checker, paths, margin)
+        if where[0] >= 0:
+            return False, where, smallest, samples
+        at_vertices = checker.min_clearance(surface.vertices)
+        smallest = min(smallest, float(np.min(at_vertices)))
+        samples += len(at_vertices)
+        hits = np.flatnonzero(~(at_vertices > margin))  # NaN counts as a hit
+        if len(hits):
+            return False, tuple(int(i) for i in np.unravel_index(hits[0], paths.shape[:2])), \
+                smallest, samples
+    live = ~surface.cuts[top]
+    quads = top[live] * columns + left[live]
     triangles = _distinct_triangles(surface, np.concatenate([quads, rows * columns + quads]))
     ok, failed, least, count = certify_simplices(
         checker, np.take(surface.vertices, triangles, axis=0), margin, max_depth)
@@ -112,36 +132,35 @@ def certify_polylines(checker: CollisionChecker, polylines: list[np.ndarray], ma
                       max_depth: int) -> tuple[bool, tuple[int, int], float, int]:
     """Certify that every point of each polyline (k_i, n) [rad] is collision-free.
 
-    Blocks of segments first, then the segments left (module docstring); a polyline of
-    one point is that point. Returns (ok, (polyline, point) where it failed or (-1, -1),
-    smallest clearance sampled [m], number of clearance samples). A polyline with a point
-    that is not finite or lies beyond `LARGEST_ANGLE` fails unmeasured.
+    Segment by segment (`certify_simplices`); a polyline of one point is that point, and
+    one of none has nothing to certify. Returns (ok, (polyline, point) where it failed or
+    (-1, -1), smallest clearance sampled [m], number of clearance samples). A polyline
+    with a point that is not finite or lies beyond `LARGEST_ANGLE` fails unmeasured.
+    Raises ValueError for a polyline that is not (k, n) with n the robot's joints.
     """
-    lines = [np.asarray(line, dtype=float) for line in polylines]
-    if not lines:
-        return True, (-1, -1), np.inf, 0
-    lengths = [len(line) for line in lines]
-    lines = [line if len(line) > 1 else np.concatenate([line, line]) for line in lines]
-    firsts = np.cumsum([0] + [len(line) for line in lines])
-    row = np.concatenate(lines)
+    lines = [_checked(checker, line, 2, 'a polyline') for line in polylines]
+    pieces = [np.stack([line[:-1], line[1:]], axis=1) if len(line) > 1 else
+              np.stack([line, line], axis=1) for line in lines]
+    owners = np.concatenate([np.full(len(piece), k) for k, piece in enumerate(pieces)] +
+                            [np.zeros(0, dtype=np.int64)]).astype(np.int64)
+    corners = np.concatenate(pieces + [np.zeros((0, 2, checker.robot.n_joints))])
+    ok, failed, smallest, samples = certify_simplices(checker, corners, margin, max_depth)
+    if ok:
+        return True, (-1, -1), smallest, samples
+    line = int(owners[failed])
+    point = failed - int(np.searchsorted(owners, line))  # the segment's first point
+    if _measurable(corners[failed, 0]) and not _measurable(corners[failed, 1]):
+        point = min(point + 1, len(lines[line]) - 1)
+    return False, (line, int(point)), smallest, samples
 
-    def owner(point: int) -> tuple[int, int]:
-        line = int(np.searchsorted(firsts, point, side='right')) - 1
-        return line, min(int(point - firsts[line]), lengths[line] - 1)
 
-    if not _measurable(row):
-        return False, owner(int(np.flatnonzero(~np.all(np.abs(row) <= LARGEST_ANGLE,
-                                                       axis=1))[0])), np.nan, 0
-    live = np.ones((1, len(row) - 1), dtype=bool)
-    live[0, firsts[1:-1] - 1] = False  # from one polyline's last point to the next's first
-    where, (_, left), smallest, samples = _certify_blocks(checker, row[None], live, margin,
-                                                          _first_block(checker))
-    if where[0] >= 0:
-        return False, owner(where[1]), smallest, samples
-    ok, failed, least, count = certify_simplices(
-        checker, np.stack([row[left], row[left + 1]], axis=1), margin, max_depth)
-    return ok, ((-1, -1) if ok else owner(int(left[failed]))), float(min(smallest, least)), \
-        samples + count
+def _checked(checker: CollisionChecker, points, dimensions: int, what: str) -> np.ndarray:
+    """Return `points` as a float array of `dimensions` axes, the last the robot's joints."""
+    points = np.asarray(points, dtype=float)
+    if points.ndim != dimensions or points.shape[-1] != checker.robot.n_joints:
+        raise ValueError(f'{what} must be {dimensions}-dimensional with '
+                         f'{checker.robot.n_joints} joint angles last, got shape {points.shape}')
+    return points
 
 
 def _measurable(points: np.ndarray) -> bool:
@@ -149,51 +168,28 @@ def _measurable(points: np.ndarray) -> bool:
     return bool(np.abs(points).max(initial=0.0) <= LARGEST_ANGLE)  # False for NaN
 
 
-def _first_block(checker: CollisionChecker) -> int:
-    """Cells a side of the first blocks: `_FIRST_BLOCK`, or 1 (no blocks) for most checkers.
+def _certify_blocks(checker: CollisionChecker, paths: np.ndarray, margin: float,
+                    ) -> tuple[tuple[int, int], tuple[np.ndarray, np.ndarray], float, int]:
+    """Certify the quads of a web's grid of points (K, W+1, n) [rad] in blocks.
 
-    Only a checker that measures in one exact compiled pass (a planar chain among
-    spheres, `CollisionChecker.planar_disks`) gets blocks. Elsewhere a block's large
-    spread asks for exact distances of many more pairs (fcl) than a triangle's, and blocks
-    did not pay on the Panda and iiwa scenes.
-    """
-    return _FIRST_BLOCK if checker.planar_disks is not None else 1
-
-
-def _certify_blocks(checker: CollisionChecker, grid: np.ndarray, live: np.ndarray,
-                    margin: float, first: int) -> tuple[tuple[int, int],
-                                                        tuple[np.ndarray, np.ndarray],
-                                                        float, int]:
-    """Certify blocks of the cells of a grid of points (R+1, C+1, n) or (1, C+1, n) [rad].
-
-    Cell (r, c) has corners (r, c) and (r+1, c+1) (a segment of the one row, for a grid
-    of one row); `live` (R, C) or (1, C) says which cells must be certified. Blocks of
-    `first` cells a side (a power of two) are measured at their middle point, against the
-    box of their points, and the blocks left open are split in four (in two along one
-    row) until single cells are left. Returns the (row, column) of a measured point that
-    is not clear by more than `margin` [m] (else (-1, -1)), the (top, left) of the live
-    cells left, the smallest clearance measured [m] and the number of measurements.
+    Quad (k, w) has corners (k, w) and (k+1, w+1). Blocks of `_FIRST_BLOCK` quads a side
+    are measured at their middle vertex, against the box of their vertices, and the
+    blocks left open are split in four until single quads are left. Returns the (path,
+    waypoint) of a measured vertex that is not clear by more than `margin` [m] (else
+    (-1, -1)), the (path, waypoint) of the quads left, the smallest clearance measured [m]
+    and the number of measurements.
     """
     arms = checker.lever_arms()
-    rows, columns = live.shape
-    last_row = grid.shape[0] - 1
-    live_before = np.zeros((rows + 1, columns + 1), dtype=np.int64)  # summed-area table
-    live_before[1:, 1:] = np.cumsum(np.cumsum(live, axis=0), axis=1)
-    size = first
+    rows, columns = paths.shape[0] - 1, paths.shape[1] - 1
+    size = _FIRST_BLOCK
     top, left = (corner.ravel() for corner in np.meshgrid(
         np.arange(0, rows, size), np.arange(0, columns, size), indexing='ij'))
     smallest, samples = np.inf, 0
     while size > 1:
         bottom, right = np.minimum(top + size, rows), np.minimum(left + size, columns)
-        alive = (live_before[bottom, right] - live_before[top, right] -
-                 live_before[bottom, left] + live_before[top, left]) > 0
-        top, left, bottom, right = top[alive], left[alive], bottom[alive], right[alive]
-        if not len(top):
-            break
-        bottom = np.minimum(bottom, last_row)  # 0 for a grid of one row
         middle_row, middle_column = (top + bottom) // 2, (left + right) // 2
-        at = grid[middle_row, middle_column]
-        spread = _block_spread(grid, top, left, bottom, right, at)
+        at = paths[middle_row, middle_column]
+        spread = _block_spread(paths, top, left, bottom, right, at)
         hit, opened, least = _measure(checker, at, spread, arms, margin)
         samples += len(top)
         smallest = min(smallest, least)
@@ -205,8 +201,7 @@ def _certify_blocks(checker: CollisionChecker, grid: np.ndarray, live: np.ndarra
         left = (left[opened][:, None] + [0, size, 0, size]).ravel()
         inside = (top < rows) & (left < columns)
         top, left = top[inside], left[inside]
-    keep = live[top, left]
-    return (-1, -1), (top[keep], left[keep]), float(smallest), samples
+    return (-1, -1), (top, left), float(smallest), samples
 
 
 @numba.njit(cache=True)
@@ -282,26 +277,30 @@ def _measure_planar(at, spread, lengths, link_radius, centres, radii, cap, arms,
     return first_hit, opened, smallest
 
 
-def _distinct_triangles(surface: FailureSurface, triangles: np.ndarray) -> np.ndarray:
-    """Vertex indices (T', 3) of the given triangles that certification needs.
+def _distinct_triangles(surface: FailureSurface, chosen: np.ndarray) -> np.ndarray:
+    """Vertex indices (T', 3) of the triangles among `chosen` that certification needs.
 
-    `triangles` are indices into `surface.triangles`; each set of points is kept once.
-
-    A triangle with a repeated point (where a column is padded) is a segment or a point;
-    it is left out when it is an edge or a corner of a proper triangle kept: certifying
-    that triangle certifies it. Only triangles with a corner whose point another vertex
-    shares can repeat a set or be such a segment or point, or hold one, so the others
-    (almost all of the paper's fan) are kept without sorting.
+    `chosen` are indices into `surface.triangles`, live ones. Of the live triangles with
+    one point set, the first is kept; a triangle with a repeated point (where a column is
+    padded) is a segment or a point, left out when it is an edge or a corner of a proper
+    triangle kept: certifying that triangle certifies it. This is done over every live
+    triangle of the web, then the kept ones among `chosen` are returned: one left out here
+    is covered by one kept, chosen or not (then certified in a block). Only triangles with
+    a corner whose point another vertex shares can repeat a set or be such a segment or
+    point, or hold one, so the others (almost all of the paper's fan) are kept without
+    sorting.
     """
-    triangles = surface.triangles[triangles]
-    if not len(triangles):
-        return triangles
-    points = surface.vertex_ids[triangles]
+    if not len(chosen):
+        return np.zeros((0, 3), dtype=surface.triangles.dtype)
+    live = np.flatnonzero(surface.live_triangles)
+    points = surface.vertex_ids[surface.triangles[live]]
     many = surface.shared_points
     shared = many[points[:, 0]] | many[points[:, 1]] | many[points[:, 2]]
     keep = ~shared
     keep[np.flatnonzero(shared)[_distinct_sets(points[shared])]] = True
-    return triangles[keep]
+    kept = np.zeros(len(surface.triangles), dtype=bool)
+    kept[live[keep]] = True
+    return surface.triangles[chosen[kept[chosen]]]
 
 
 def _distinct_sets(points: np.ndarray) -> np.ndarray:

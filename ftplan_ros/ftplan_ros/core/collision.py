@@ -192,13 +192,12 @@ class CollisionChecker:
         origin (`Robot.frame_lever_arms`); for spheres and capsules, whose distances are
         their cores' minus the radius, the extent of the core. For a pair of shapes on
         links a < b, only joints that turn b and not a change the distance: joints
-        a..b-1, with the arms of b's shape. Computed once (the shapes are fixed) and
-        returned read-only.
+        a..b-1, with the arms of b's shape. Computed once (the shapes are fixed); each
+        caller gets its own copy, so no caller can change what certification relies on.
         """
         if self._lever_arms is None:
             self._lever_arms = self._compute_lever_arms()
-            self._lever_arms.flags.writeable = False
-        return self._lever_arms
+        return self._lever_arms.copy()
 
     def _compute_lever_arms(self) -> np.ndarray:
         frame = self.robot.frame_lever_arms()
