@@ -241,8 +241,9 @@ def test_a_polyline_or_simplices_of_the_wrong_shape_are_refused(line):
     checker = CollisionChecker(ARM, random_disks(np.random.default_rng(0)))
     with pytest.raises(ValueError, match='polyline'):
         certify_polylines(checker, [line], 0.0, 5)
-    with pytest.raises(ValueError, match='corners'):
-        certify_simplices(checker, np.zeros((2, 2, 2)), 0.0, 5)
+    for corners in (np.zeros((2, 2, 2)), np.zeros((2, 1, 3)), np.zeros((2, 4, 3))):
+        with pytest.raises(ValueError, match='corners'):
+            certify_simplices(checker, corners, 0.0, 5)
 
 
 def test_the_lever_arms_a_caller_changes_are_its_own():

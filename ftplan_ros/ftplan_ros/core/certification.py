@@ -48,9 +48,12 @@ def certify_simplices(checker: CollisionChecker, corners: np.ndarray, margin: fl
     Returns (ok, index of the first simplex that failed or -1, smallest clearance sampled
     [m], number of clearance samples). A simplex with a corner that is not finite or lies
     beyond `LARGEST_ANGLE` fails unmeasured. Raises ValueError for corners that are not
-    (S, c, n) with n the robot's joints.
+    (S, c, n), c = 2 or 3, with n the robot's joints.
     """
     corners = _checked(checker, corners, 3, 'corners')
+    if corners.shape[1] not in (2, 3):  # a split would drop the corners past the third
+        raise ValueError(f'corners must be segments or triangles, got {corners.shape[1]} '
+                         'corners a simplex')
     arms = checker.lever_arms()
     roots = np.arange(len(corners))
     smallest = np.inf
