@@ -102,8 +102,6 @@ def certify_web(checker: CollisionChecker, surface: FailureSurface, margin: floa
         return certify_polylines(checker, list(paths), margin, max_depth)
     rows, columns = paths.shape[0] - 1, paths.shape[1] - 1  # quads of the grid
     smallest, samples = np.inf, 0
-    top, left = (corner.ravel() for corner in np.meshgrid(np.arange(rows), np.arange(columns),
-                                                          indexing='ij'))
     # Blocks pay for a planar chain among spheres, measured in one exact compiled pass:
     # elsewhere a block's large spread asks for exact distances of many more pairs (fcl)
     # than a triangle's (the Panda's self-check took 3x as long). And not on a web of
@@ -121,6 +119,9 @@ def certify_web(checker: CollisionChecker, surface: FailureSurface, margin: floa
         if len(hits):
             return False, tuple(int(i) for i in np.unravel_index(hits[0], paths.shape[:2])), \
                 smallest, samples
+    else:
+        top, left = (corner.ravel() for corner in np.meshgrid(
+            np.arange(rows), np.arange(columns), indexing='ij'))
     live = ~surface.cuts[top]
     quads = top[live] * columns + left[live]
     triangles = _distinct_triangles(surface, np.concatenate([quads, rows * columns + quads]))

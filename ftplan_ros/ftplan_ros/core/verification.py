@@ -5,11 +5,12 @@ tolerated joint locked there, a collision-free path in that joint's failure hype
 reaches the goal. The proof has three parts, each checked here rather than trusted:
 
 1. Every triangle of S_F is collision-free, over the continuum (`certification.py`): a
-   block of the web, or a triangle, is certified when every clearance channel at a point
-   of it (each link against the obstacles, each self-collision pair; collision.py)
-   exceeds how far that channel can change inside it (Σ_a R[c, a] · max |θ_a - point_a|
-   over its corners, `CollisionChecker.lever_arms`); otherwise it is split in four, down
-   to single triangles and then to a depth limit.
+   block of quads of the web, or a triangle, is certified when every clearance channel
+   at a point of it (each link against the obstacles, each self-collision pair;
+   collision.py) exceeds how far that channel can change inside it (Σ_a R[c, a] ·
+   max |θ_a - point_a| over its corners, `CollisionChecker.lever_arms`); otherwise it is
+   split in four, a block down to single quads, whose triangles are split down to a
+   depth limit.
 2. Every point of the goal row (the goal points and the chords between them) is within
    the goal tolerances: the position error sampled plus a second-order bound between
    samples, the orientation error sampled plus a first-order bound (the tool turns at

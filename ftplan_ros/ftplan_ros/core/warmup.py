@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .certification import certify_polylines, certify_simplices, certify_web
+from .certification import certify_simplices, certify_web
 from .collision import CollisionChecker
 from .curves import FrozenJoints
 from .failure_planes import FailurePlaneHit, crossing_segments
@@ -44,7 +44,6 @@ def load_kernels(robot: Robot) -> None:
         checker = CollisionChecker(robot, obstacles)  # spheres alone: a planar fast path
         checker.clearance(np.stack([theta, theta]), needed=np.inf)
         certify_simplices(checker, corners, 0.0, 1)
-        certify_polylines(checker, [corners[0]], 0.0, 1)
     crossing_segments(np.array([0.0, 1.0]), np.array([0.5]), periodic=True)
     smallest_windows(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1), 1, 1)
     choose_hits([[FailurePlaneHit(0, theta, 0.0)]], (0.0, 0.0))
@@ -52,6 +51,6 @@ def load_kernels(robot: Robot) -> None:
     fan = np.stack([np.stack([theta, theta + 0.1]), np.stack([theta, theta + 0.2])])
     surface = FailureSurface(fan, 0, (), ())
     recover(surface, theta + 0.05, 0)
-    certify_web(checker, surface, 0.0, 1)
+    certify_web(checker, surface, 0.0, 1)  # in blocks, with the planar fast path
     if isinstance(robot, PlanarChain) and robot.n_joints == 3:
         load_sheet_kernels()  # the recovery sheets' grid, searches and slices
