@@ -145,8 +145,7 @@ def certify_polylines(checker: CollisionChecker, polylines: list[np.ndarray], ma
     lines = [_checked(checker, line, 2, 'a polyline') for line in polylines]
     pieces = [np.stack([line[:-1], line[1:]], axis=1) if len(line) > 1 else
               np.stack([line, line], axis=1) for line in lines]
-    owners = np.concatenate([np.full(len(piece), k) for k, piece in enumerate(pieces)] +
-                            [np.zeros(0, dtype=np.int64)]).astype(np.int64)
+    owners = np.repeat(np.arange(len(pieces)), [len(piece) for piece in pieces])
     corners = np.concatenate(pieces + [np.zeros((0, 2, checker.robot.n_joints))])
     ok, failed, smallest, samples = certify_simplices(checker, corners, margin, max_depth)
     if ok:
