@@ -42,7 +42,8 @@ def test_infeasible_plan_exits_1_with_the_reason(tmp_path):
     out = tmp_path / 'plan.json'
     run = ftplan('plan', SCENES / 'infeasible.yaml', '--json', out)
     assert run.returncode == 1
-    assert 'no failure-tolerant plan: no candidate' in run.stdout
+    assert 'no failure-tolerant plan: no failure-tolerant plan exists (proved' in run.stdout
+    assert 'no candidate θ_s passes the necessary condition' in run.stdout
     data = json.loads(out.read_text())
     assert data['feasible'] is False and 'necessary condition' in data['reason']
 

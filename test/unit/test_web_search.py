@@ -23,6 +23,7 @@ from ftplan_ros.core.verification import VerificationOptions, verify_surface
 from ftplan_ros.core.web_search import (
     METHOD,
     PAPER_METHOD,
+    PROVED_NONE,
     _bfs,
     _greedy_cuts,
     _piece_middles,
@@ -231,6 +232,22 @@ def test_the_papers_second_round_runs_when_the_sheets_decide_nothing():
     assert not result.feasible and not result.stats['proved_infeasible']
     assert result.stats['candidate_subdivisions'] == PlannerOptions().candidate_refinement
     assert result.reason.startswith('no failure-tolerant plan found within the resolution')
+
+
+def test_no_room_to_start_is_proved_on_the_grids_where_they_can():
+    """No start passes the paper's necessary condition: the sheets' grids prove that no
+    plan exists (the 256^3 reference agrees); a grid too coarse says it proved nothing."""
+    scene = load_scene(SCENES / 'infeasible.yaml')
+    result = plan(scene)
+    assert result.stats['theta_S'] == 0 and result.stats['start_candidates'] > 0
+    assert result.stats['proved_infeasible']
+    assert result.reason.startswith(PROVED_NONE)
+    assert 'necessary condition' in result.reason
+    assert decide_existence(scene, 256).existence is Existence.NO
+    coarse = plan(scene, PlannerOptions(sheet_cells=(32,)))
+    assert not coarse.stats['proved_infeasible']
+    assert coarse.reason.startswith('no failure-tolerant plan found (not proved that none '
+                                    'exists on 32^3 cells)')
 
 
 def test_the_grid_search_finds_a_shortest_path_through_the_mask():

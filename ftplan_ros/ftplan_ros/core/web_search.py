@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 
 import numba
@@ -80,12 +80,13 @@ def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
     result = replace(result, stats={'method': PAPER_METHOD} | result.stats)
     if result.feasible or not sheets_apply(scene, options):
         return result
+    sheets = WebSearch(scene, options, report, start_configuration, prefer_starts, checker)
     if result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0:
         # No start passes the necessary condition (eq. 6) for every joint, with starts a
-        # quarter step apart along M_s: no plan has room to start (not a proof).
-        return result
-    return with_sheets(result, WebSearch(scene, options, report, start_configuration,
-                                         prefer_starts, checker).run(previous=result))
+        # quarter step apart along M_s: no plan has room to start, unless between those
+        # starts. The first grid settles it where it can; no web is searched.
+        return with_sheets(result, sheets.prove_none(previous=result))
+    return with_sheets(result, sheets.run(previous=result))
 
 
 def with_sheets(paper: PlanResult, sheets: PlanResult) -> PlanResult:
@@ -141,41 +142,66 @@ class WebSearch:
         """Try each grid in turn; the result keeps `previous`'s manifolds for the figures.
 
         Each grid of `options.sheet_cells` is classified, then tried pooled to half as many
-        cells per joint (`pooled_tolerant_set`: sharper than classifying those cells, and
-        an eighth of the cells to label), then as it is.
+        cells per joint, then as it is (`_grids`). Where no web is found on a grid, the
+        grid may prove that no plan exists.
         """
         stats: dict = {'method': METHOD}
         reason = 'no grid tried'
-        for cells in self.options.sheet_cells:
-            classified = tolerant_set(self.scene, cells, margin=self.margin)
-            for grid in (pooled_tolerant_set(classified), classified):
-                if grid is None:
-                    continue
-                where = f'{grid.lattice.cells}^3 cells' + (
-                    f' pooled from {cells}^3' if grid is not classified else '')
-                self.report(f'recovery sheets on {where}')
-                surface, reason = self._plan_on(grid)
-                stats.update(grid_cells=grid.lattice.cells, classified_cells=cells)
-                if surface is not None:
-                    surface = _wrapped(surface, self.scene.robot.periodic)
-                    verdict = verify_surface(surface, self.checker, self.scene.task,
-                                             self.options.verification)
-                    if verdict.ok:
-                        stats.update(min_clearance_m=verdict.min_clearance,
-                                     recovery_min_clearance_m=verdict.recovery_min_clearance,
-                                     goal_error_bound_m=verdict.max_goal_error,
-                                     clearance_samples=verdict.clearance_samples,
-                                     criterion='a shortest path through the failure-tolerant '
-                                     'set', web_shape=list(surface.paths.shape))
-                        return self._result(True, '', surface, stats, previous)
-                    reason = f'the recovery sheets failed the self-check: {verdict.reason}'
-                    log.debug(reason)
-                    continue
-                if proves_no(grid):
-                    stats['proved_infeasible'] = True
-                    return self._result(False, f'{PROVED_NONE}, {where}', None, stats, previous)
+        for cells, grid, where in self._grids(self.options.sheet_cells):
+            self.report(f'recovery sheets on {where}')
+            surface, reason = self._plan_on(grid)
+            stats.update(grid_cells=grid.lattice.cells, classified_cells=cells)
+            if surface is not None:
+                surface = _wrapped(surface, self.scene.robot.periodic)
+                verdict = verify_surface(surface, self.checker, self.scene.task,
+                                         self.options.verification)
+                if verdict.ok:
+                    stats.update(min_clearance_m=verdict.min_clearance,
+                                 recovery_min_clearance_m=verdict.recovery_min_clearance,
+                                 goal_error_bound_m=verdict.max_goal_error,
+                                 clearance_samples=verdict.clearance_samples,
+                                 criterion='a shortest path through the failure-tolerant '
+                                 'set', web_shape=list(surface.paths.shape))
+                    return self._result(True, '', surface, stats, previous)
+                reason = f'the recovery sheets failed the self-check: {verdict.reason}'
+                log.debug(reason)
+                continue
+            if proves_no(grid):
+                stats['proved_infeasible'] = True
+                return self._result(False, f'{PROVED_NONE}, {where}', None, stats, previous)
         return self._result(False, 'no failure-tolerant plan found within the resolution of '
                             f'the joint grid ({reason})', None, stats, previous)
+
+    def prove_none(self, previous: PlanResult | None = None) -> PlanResult:
+        """Try to prove that no plan exists, on the grids `run` takes, without searching webs.
+
+        For scenes where a plan is unlikely (no start passes the paper's necessary
+        condition). The result is never feasible; stats['proved_infeasible'] says whether
+        a grid proved it.
+        """
+        stats: dict = {'method': METHOD}
+        where = 'no grid'
+        for cells, grid, where in self._grids(self.options.sheet_cells):
+            self.report(f'trying to prove that no plan exists, on {where}')
+            stats.update(grid_cells=grid.lattice.cells, classified_cells=cells)
+            if proves_no(grid):
+                stats['proved_infeasible'] = True
+                return self._result(False, f'{PROVED_NONE}, {where}', None, stats, previous)
+        return self._result(False, f'no failure-tolerant plan found (not proved that none '
+                            f'exists on {where})', None, stats, previous)
+
+    def _grids(self, sizes: tuple[int, ...]) -> Iterator[tuple[int, TolerantSet, str]]:
+        """Yield (cells, grid, where) for each size: its grid pooled, then as classified.
+
+        Pooled (`pooled_tolerant_set`) comes first: sharper than classifying that many
+        cells, and an eighth of the cells to label.
+        """
+        for cells in sizes:
+            classified = tolerant_set(self.scene, cells, margin=self.margin)
+            for grid in (pooled_tolerant_set(classified), classified):
+                if grid is not None:
+                    yield cells, grid, f'{grid.lattice.cells}^3 cells' + (
+                        f' pooled from {cells}^3' if grid is not classified else '')
 
     def _result(self, feasible: bool, reason: str, surface: FailureSurface | None,
                 stats: dict, previous: PlanResult | None) -> PlanResult:
