@@ -84,7 +84,7 @@ def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
     if result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0:
         # No start passes the necessary condition (eq. 6) for every joint, with starts a
         # quarter step apart along M_s: no plan has room to start, unless between those
-        # starts. The first grid settles it where it can; no web is searched.
+        # starts. No web is searched; the sheets' grids try to prove that none exists.
         return with_sheets(result, sheets.prove_none(previous=result))
     return with_sheets(result, sheets.run(previous=result))
 
