@@ -19,6 +19,7 @@ from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, 
 from ftplan_ros.core.failure_planes import failure_hypercube
 from ftplan_ros.core.paths import densify, path_length, point_at_fraction
 from ftplan_ros.core.reference import Existence, decide_existence
+from ftplan_ros.core.tolerant_set import fits_goal_tolerance
 from ftplan_ros.core.verification import VerificationOptions, verify_surface
 from ftplan_ros.core.web_search import (
     METHOD,
@@ -247,7 +248,26 @@ def test_no_room_to_start_is_proved_on_the_grids_where_they_can():
     coarse = plan(scene, PlannerOptions(sheet_cells=(32,)))
     assert not coarse.stats['proved_infeasible']
     assert coarse.reason.startswith('no failure-tolerant plan found (not proved that none '
-                                    'exists on 32^3 cells)')
+                                    'exists; the finest grid tried: 32^3 cells)')
+    margin = plan(scene, PlannerOptions(verification=VerificationOptions(margin=0.01)))
+    assert margin.stats['proved_infeasible']
+    assert 'for a clearance above the margin of 0.01 m' in margin.reason
+
+
+def test_grids_too_coarse_for_the_goal_tolerance_are_passed_over():
+    """`tolerant_set` refuses a grid too coarse for the goal tolerance (a ValueError the
+    planner let through): the sheets pass such grids over, and say so when none is left."""
+    scene = load_scene(SCENES / 'infeasible.yaml')
+    finer = replace(scene, task=replace(scene.task, goal_tolerance=0.001))
+    assert not fits_goal_tolerance(finer, 128) and fits_goal_tolerance(finer, 256)
+    result = plan(finer)
+    assert result.stats['proved_infeasible'] and ', 256^3 cells;' in result.reason
+    for name in ('infeasible', 'crowded_sheets_100'):  # the proof alone; the sheets
+        scene = load_scene(SCENES / f'{name}.yaml')
+        result = plan(replace(scene, task=replace(scene.task, goal_tolerance=1e-5)))
+        assert not result.feasible and not result.stats['proved_infeasible']
+        assert 'no joint grid of sheet_cells is fine enough for the goal tolerance' \
+            in result.reason
 
 
 def test_the_grid_search_finds_a_shortest_path_through_the_mask():

@@ -257,10 +257,15 @@ def tolerant_set(scene: Scene, cells: int, margin: float = 0.0) -> TolerantSet:
     """
     if not supports(scene):
         raise InputError('robot', 'the joint grid handles planar 3R arms among disks only')
-    classes = classify_cells(scene, cells, margin)
-    if not _fine_enough(scene, classes.lattice):
+    if cells >= 1 and not fits_goal_tolerance(scene, cells):  # (classify_cells checks < 1)
         raise ValueError(f'{cells} cells are too coarse for the goal tolerance')
-    return TolerantSet(scene, classes, tuple(scene.tolerated_joints))
+    return TolerantSet(scene, classify_cells(scene, cells, margin),
+                       tuple(scene.tolerated_joints))
+
+
+def fits_goal_tolerance(scene: Scene, cells: int) -> bool:
+    """Whether G can be built on `cells` cells per joint for the task's goal tolerance."""
+    return cells >= 1 and _fine_enough(scene, JointLattice.over(scene.robot, cells))
 
 
 def pooled_tolerant_set(grid: TolerantSet) -> TolerantSet | None:

@@ -53,7 +53,13 @@ from .options import PlannerOptions
 from .reference import proves_no
 from .result import PlanResult
 from .scene import Scene
-from .tolerant_set import TolerantSet, pooled_tolerant_set, preimage_samples, tolerant_set
+from .tolerant_set import (
+    TolerantSet,
+    fits_goal_tolerance,
+    pooled_tolerant_set,
+    preimage_samples,
+    tolerant_set,
+)
 from .verification import verify_surface
 
 log = logging.getLogger(__name__)
@@ -64,6 +70,7 @@ _MOST_ROUNDS = 12  # rounds of waypoints added to the nominal path (where strips
 _SHORTEST_SEGMENT = 1e-4  # [rad] a nominal segment is not split below this
 _LAYERS_PER_STRIP = 4  # the nominal path gets a waypoint every this many θ_i-layers
 PROVED_NONE = 'no failure-tolerant plan exists (proved on a joint grid)'
+_NO_GRID = 'no joint grid of sheet_cells is fine enough for the goal tolerance'
 
 
 def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
@@ -146,7 +153,7 @@ class WebSearch:
         grid may prove that no plan exists.
         """
         stats: dict = {'method': METHOD}
-        reason = 'no grid tried'
+        reason = _NO_GRID
         for cells, grid, where in self._grids(self.options.sheet_cells):
             self.report(f'recovery sheets on {where}')
             surface, reason = self._plan_on(grid)
@@ -168,7 +175,7 @@ class WebSearch:
                 continue
             if proves_no(grid):
                 stats['proved_infeasible'] = True
-                return self._result(False, f'{PROVED_NONE}, {where}', None, stats, previous)
+                return self._result(False, self._proved(where), None, stats, previous)
         return self._result(False, 'no failure-tolerant plan found within the resolution of '
                             f'the joint grid ({reason})', None, stats, previous)
 
@@ -180,28 +187,37 @@ class WebSearch:
         a grid proved it.
         """
         stats: dict = {'method': METHOD}
-        where = 'no grid'
+        tried = _NO_GRID
         for cells, grid, where in self._grids(self.options.sheet_cells):
             self.report(f'trying to prove that no plan exists, on {where}')
             stats.update(grid_cells=grid.lattice.cells, classified_cells=cells)
             if proves_no(grid):
                 stats['proved_infeasible'] = True
-                return self._result(False, f'{PROVED_NONE}, {where}', None, stats, previous)
+                return self._result(False, self._proved(where), None, stats, previous)
+            tried = f'the finest grid tried: {where}'
         return self._result(False, f'no failure-tolerant plan found (not proved that none '
-                            f'exists on {where})', None, stats, previous)
+                            f'exists; {tried})', None, stats, previous)
 
     def _grids(self, sizes: tuple[int, ...]) -> Iterator[tuple[int, TolerantSet, str]]:
         """Yield (cells, grid, where) for each size: its grid pooled, then as classified.
 
         Pooled (`pooled_tolerant_set`) comes first: sharper than classifying that many
-        cells, and an eighth of the cells to label.
+        cells, and an eighth of the cells to label. Sizes too coarse for the goal
+        tolerance (`fits_goal_tolerance`) are passed over.
         """
         for cells in sizes:
+            if not fits_goal_tolerance(self.scene, cells):
+                continue
             classified = tolerant_set(self.scene, cells, margin=self.margin)
             for grid in (pooled_tolerant_set(classified), classified):
                 if grid is not None:
                     yield cells, grid, f'{grid.lattice.cells}^3 cells' + (
                         f' pooled from {cells}^3' if grid is not classified else '')
+
+    def _proved(self, where: str) -> str:
+        """Return the reason of a failure the grid `where` proved, with the margin it holds for."""
+        return f'{PROVED_NONE}, {where}' + (
+            f', for a clearance above the margin of {self.margin:g} m' if self.margin > 0 else '')
 
     def _result(self, feasible: bool, reason: str, surface: FailureSurface | None,
                 stats: dict, previous: PlanResult | None) -> PlanResult:
