@@ -262,7 +262,7 @@ def test_grids_too_coarse_for_the_goal_tolerance_are_passed_over():
     assert not fits_goal_tolerance(finer, 128) and fits_goal_tolerance(finer, 256)
     result = plan(finer)
     assert result.stats['proved_infeasible'] and ', 256^3 cells;' in result.reason
-    for name in ('infeasible', 'crowded_sheets_100'):  # the proof alone; the sheets
+    for name in ('infeasible', 'crowded_sheets_100'):  # prove_none's path, then run's
         scene = load_scene(SCENES / f'{name}.yaml')
         result = plan(replace(scene, task=replace(scene.task, goal_tolerance=1e-5)))
         assert not result.feasible and not result.stats['proved_infeasible']
