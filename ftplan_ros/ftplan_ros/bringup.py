@@ -341,7 +341,8 @@ def main(argv: list[str] | None = None) -> int:
         if not motion.succeeded:
             print(f'scene {scene.name}: {motion.message}')
             return 1
-        progress.line(f'plan found in {motion.plan_time_s:.3f} s; {runs_wanted} run(s)')
+        progress.line(f'plan found in {motion.plan_time_s:.3f} s; approach: '
+                      f'{motion.approach or "not reported"}; {runs_wanted} run(s)')
         runs: list[RunReport] = []
         for number in range(1, runs_wanted + 1):
             report = director.run(number, record=args.png is not None, timeout=args.timeout)

@@ -101,6 +101,7 @@ class PlannedMotion:
     plan_time_s: float = float('nan')        # the core's plan time, from the planner's status
     task_kind: str = ''                      # planar, position, axis or pose (planner's status)
     tolerated_joints: tuple[str, ...] = ()   # whose lock the plan survives (planner's status)
+    approach: str = ''                       # how the arm gets to θ_s, or why not (status)
 
     @property
     def succeeded(self) -> bool:
@@ -296,7 +297,8 @@ class PlanClient(Node):
                              key, names, path, orientations, theta_s, trajectory, times,
                              surface, index, round_trip, plan_time,
                              info.task_kind if info else '',
-                             info.tolerated_joints if info else ())
+                             info.tolerated_joints if info else (),
+                             status.values.get('approach', '') if status else '')
 
     def _plan_status(self, key: str, mark: int, timeout: float) -> DiagnosticReading | None:
         """Wait for the planner's status of plan `key` after `mark`; None after `timeout` [s]."""

@@ -21,6 +21,7 @@ def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tm
     assert 'plan ' in out.splitlines()[0] and 'theta_s' in out.splitlines()[0]
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'
     assert 'run 1/1: joint2@0.4 -> reached' in err
+    assert 'approach: ' in err  # how the arm gets to θ_s, from the planner's status
 
 
 def test_bad_input_exits_2_with_one_line(processes):
@@ -71,6 +72,18 @@ def test_a_bad_png_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_
         assert code == 2, (args, out, err)
         assert problem in err and 'Traceback' not in err
         assert 'starting the planner' not in err                 # refused before any node
+
+
+def test_where_no_plan_starts_within_the_arms_reach_the_bringup_says_so(processes):
+    """out_of_reach: the sim's default start lies in another free component than every
+    start that may be failure-tolerant. The run fails before moving, and the plan's line
+    says that a grid proved no plan can start within the arm's reach."""
+    scene = Path(__file__).parent / 'scenes' / 'out_of_reach.yaml'
+    code, out, err = processes(BRINGUP + ['--scene', scene]).wait(timeout=300)
+    assert code == 1, out + err
+    assert 'approach: no failure-tolerant plan starts where the arm can get to from here ' \
+        '(proved on a 64^3 joint grid' in err
+    assert '0/1 runs reached the goal without collision' in out
 
 
 def test_drills_from_the_sims_default_start_work_when_theta_s_is_on_another_arc(processes):

@@ -14,9 +14,11 @@ from ftplan_ros.core.approach import (
     plan_from,
     straight_move_ends,
 )
+from ftplan_ros.core.free_components import FreeComponents, tolerant_start_out_of_reach
 from ftplan_ros.core.manifolds import project_to_preimage, trace_self_motion_manifolds
 from ftplan_ros.core.paths import densify
 from ftplan_ros.core.scene import Obstacle
+from ftplan_ros.core.tolerant_set import preimage_samples
 
 X_S = np.array([2.0, 0.0])
 # A disk that cuts M_s in two arcs, each holding failure-tolerant starts; the planner's
@@ -159,6 +161,33 @@ def test_with_a_joint_locked_the_path_to_the_goal_holds_it_exactly():
         assert np.all(found.path[:, joint] == q[joint])
         assert task_errors(scene.robot, np.array(scene.task.goal), found.path[-1])[0] < 1e-9
         assert approaches.certify(found.path)
+
+
+def test_where_no_plan_starts_within_reach_the_approach_says_so_and_why():
+    """In out_of_reach every start that may be failure-tolerant lies in another free
+    component than the sim's default start. plan_from's approach says that a grid proved
+    it; each start of M_s^F in the arm's component (by the 64^3 free components) indeed
+    fails as a start of its own, and from the plan's θ_s nothing is proved."""
+    scene = load_scene(SCENES_OF_TESTS / 'out_of_reach.yaml')
+    q = clearest_start(scene)
+    reachable = plan_from(scene, q)
+    assert reachable.result.feasible and not reachable.approach.ok
+    assert reachable.approach.reason.startswith(
+        'no failure-tolerant plan starts where the arm can get to from here (proved on a '
+        '64^3 joint grid')
+    assert 'no collision-free joint move exists' in reachable.approach.reason
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    starts = preimage_samples(np.asarray(scene.robot.link_lengths, dtype=float),
+                              np.asarray(scene.task.start, dtype=float), 200)
+    starts = starts[checker.min_clearance(starts) > 0.0]
+    walls = FreeComponents(scene)
+    within_reach = [theta for theta in starts if not walls.separated(q, theta)]
+    assert len(within_reach) >= 5
+    for theta in within_reach[::len(within_reach) // 5][:5]:
+        assert not plan(scene, start_configuration=theta).feasible
+    assert tolerant_start_out_of_reach(scene, reachable.result.theta_s) is None
+    assert tolerant_start_out_of_reach(scene, q, grids=(256,)) == 256
+    assert tolerant_start_out_of_reach(scene, np.full(3, np.nan)) is None
 
 
 @pytest.mark.parametrize('name, route, preferred', [

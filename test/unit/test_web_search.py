@@ -252,6 +252,13 @@ def test_no_room_to_start_is_proved_on_the_grids_where_they_can():
     margin = plan(scene, PlannerOptions(verification=VerificationOptions(margin=0.01)))
     assert margin.stats['proved_infeasible']
     assert 'for a clearance above the margin of 0.01 m' in margin.reason
+    # Asked about one start, the planner answers for that start: no grid, no proof.
+    points = np.vstack([branch.points for branch in result.start_manifolds])
+    clearest = points[np.argmax(CollisionChecker(scene.robot, scene.obstacles)
+                                .min_clearance(points))]
+    given = plan(scene, start_configuration=clearest)
+    assert 'necessary condition' in given.reason and 'sheets_grid_cells' not in given.stats
+    assert not given.stats.get('proved_infeasible')
 
 
 def test_grids_too_coarse_for_the_goal_tolerance_are_passed_over():

@@ -18,7 +18,9 @@ module plans those ordinary motions; none of them is failure-tolerant (issue 10)
   in the remaining joints (straight or RRT-Connect).
 - `plan_from`: `core.plan` for an arm standing at q: starts on q's arc of M_s^F first;
   when the plan's θ_s cannot be approached, the starts on the other free arcs of M_s that
-  a joint move reaches; the plan and its approach.
+  a joint move reaches; the plan and its approach. When none is approached, a joint grid
+  may prove that no failure-tolerant plan starts within the arm's reach at all
+  (`free_components.tolerant_start_out_of_reach`); the approach's reason then says so.
 
 Every path returned is certified collision-free over the continuum, not only at its
 samples: its segments, cut to at most `certify_step` [rad], pass
@@ -40,7 +42,7 @@ import numpy as np
 from .angles import configuration_difference
 from .certification import certify_polylines
 from .collision import CollisionChecker
-from .free_components import GRID_CELLS, FreeComponents
+from .free_components import GRID_CELLS, FreeComponents, tolerant_start_out_of_reach
 from .manifolds import (
     ManifoldOptions,
     mark_obstacle_free,
@@ -408,7 +410,8 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
     the obstacle-free arc of M_s through q first. When the plan's θ_s cannot be approached
     from q (it lies on another arc and no joint move gets there), the free arcs of M_s that
     a joint move from q reaches are preferred in a second plan. The result is the plan
-    whose θ_s is approached, else the first; `approach.ok` says whether the arm gets there.
+    whose θ_s is approached, else the first; `approach.ok` says whether the arm gets there,
+    and its reason whether a grid proved that no plan starts within the arm's reach.
     """
     options = options or PlannerOptions()
     approach_options = approach_options or ApproachOptions(
@@ -427,14 +430,19 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
         return ReachablePlan(first, found)
     arcs = _joint_move_arcs(planner, q, first, exclude=[first.theta_s] + ([q] if arc is None
                                                                           else [arc[0]]))
-    if not arcs:
-        return ReachablePlan(first, found)
-    second = plan(scene, options, rng, progress, cache=cache,
-                  prefer_starts=planner.prefer_reachable(np.vstack(arcs)))
-    if second.feasible and second.stats.get('start_preferred'):
-        again = planner.approach(q, second.theta_s, arc=arc)
-        if again.ok:
-            return ReachablePlan(second, again)
+    if arcs:
+        second = plan(scene, options, rng, progress, cache=cache,
+                      prefer_starts=planner.prefer_reachable(np.vstack(arcs)))
+        if second.feasible and second.stats.get('start_preferred'):
+            again = planner.approach(q, second.theta_s, arc=arc)
+            if again.ok:
+                return ReachablePlan(second, again)
+    proved_on = tolerant_start_out_of_reach(scene, q, approach_options.margin)
+    if proved_on is not None:
+        found = Approach(None, Route.NONE, f'no failure-tolerant plan starts where the arm '
+                         f'can get to from here (proved on a {proved_on}^3 joint grid: no '
+                         f'start that may be failure-tolerant lies in its component of '
+                         f'possibly free cells); to this plan\'s theta_s: {found.reason}')
     return ReachablePlan(first, found)
 
 

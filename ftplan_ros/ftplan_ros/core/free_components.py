@@ -8,6 +8,9 @@ periodic joints) are therefore joined by no collision-free path at all, however 
 searches. A configuration in a cell of no component collides. The grid applies to
 planar 3R arms among disks (`cell_classes.supports`); the approach planner asks it
 before it searches with RRT-Connect.
+
+`tolerant_start_out_of_reach` asks the same of every start a failure-tolerant plan could
+have: when none lies in the arm's component, no plan can begin where the arm can get to.
 """
 
 from __future__ import annotations
@@ -20,10 +23,14 @@ from .cell_classes import classify_cells, supports
 from .components import Components, components, layer_components
 from .robot import Robot
 from .scene import Obstacle, Scene
+from .tolerant_set import fits_goal_tolerance, tolerant_set
 
 # Cells per joint. The proof holds at any resolution; a finer grid proves more pairs
 # apart (narrower gaps), a coarser one is quicker: 64^3 classifies in 1-4 ms.
 GRID_CELLS = 64
+# Cells per joint of the grids `tolerant_start_out_of_reach` tries, coarse first: 64^3
+# takes about 10 ms, 128^3 (the recovery sheets' first grid) about 40.
+START_GRIDS = (64, 128)
 
 
 class FreeComponents:
@@ -72,3 +79,38 @@ class FreeComponents:
         if joint not in self._layers:
             self._layers[joint] = layer_components(self.possible, joint, self.lattice.periodic)
         return self._layers[joint]
+
+
+def tolerant_start_out_of_reach(scene: Scene, q: np.ndarray, margin: float = 0.0,
+                                grids: tuple[int, ...] = START_GRIDS) -> int | None:
+    """Return the cells per joint of a grid proving that no plan starts within q's reach.
+
+    q (n,) [rad] is where the arm stands; the grids of `grids` cells per joint are tried
+    in turn (`_out_of_reach`). None when none proves it, when they do not apply (not a
+    planar 3R arm among disks, a goal tolerance too fine for them), and for a q that is
+    not finite.
+    """
+    q = np.asarray(q, dtype=float).reshape(1, -1)
+    if scene.task is None or not supports(scene) or q.shape[1] != scene.robot.n_joints \
+            or not np.all(np.isfinite(q)):
+        return None
+    return next((cells for cells in grids if fits_goal_tolerance(scene, cells)
+                 and _out_of_reach(scene, q, margin, cells)), None)
+
+
+def _out_of_reach(scene: Scene, q: np.ndarray, margin: float, cells: int) -> bool:
+    """Whether a grid of `cells` per joint proves that no plan starts where q (1, 3) reaches.
+
+    A plan's θ_s lies in a possibly free cell that may meet G and may put the tool at the
+    task start (`TolerantSet`), and every path from q clear by more than `margin` [m]
+    stays in the component of possibly free cells holding q's cell: True when no such
+    cell lies in it. False for a q outside the joint limits or in no possibly free cell
+    (it collides: the approach says so).
+    """
+    grid = tolerant_set(scene, cells, margin=margin)
+    lattice = grid.lattice
+    if not np.all(lattice.inside(q)):
+        return False
+    found = components(grid.classes.possible, lattice.periodic)
+    mine = found.at(lattice.cell_of(q))[0]
+    return bool(mine > 0 and not found.holding(grid.liberal_all & grid.near_start)[mine])
