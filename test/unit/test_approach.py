@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from ftplan_testing import REPO, SCENES, paper_scene
 
-from ftplan_ros.core import CollisionChecker, load_scene, plan, task_errors
+from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, task_errors
 from ftplan_ros.core.approach import (
     ApproachOptions,
     ApproachPlanner,
@@ -19,6 +19,7 @@ from ftplan_ros.core.manifolds import project_to_preimage, trace_self_motion_man
 from ftplan_ros.core.paths import densify
 from ftplan_ros.core.scene import Obstacle
 from ftplan_ros.core.tolerant_set import preimage_samples
+from ftplan_ros.core.verification import VerificationOptions
 
 X_S = np.array([2.0, 0.0])
 # A disk that cuts M_s in two arcs, each holding failure-tolerant starts; the planner's
@@ -187,7 +188,16 @@ def test_where_no_plan_starts_within_reach_the_approach_says_so_and_why():
         assert not plan(scene, start_configuration=theta).feasible
     assert tolerant_start_out_of_reach(scene, reachable.result.theta_s) is None
     assert tolerant_start_out_of_reach(scene, q, grids=(256,)) == 256
-    assert tolerant_start_out_of_reach(scene, np.full(3, np.nan)) is None
+    # Nothing is claimed for an arm in collision, lost turns away or not finite.
+    inside_a_disk = np.array([-0.4087, 2.9794, 2.4987])
+    assert checker.min_clearance(inside_a_disk[None])[0] < 0.0
+    for nowhere in (inside_a_disk, q + 2e15 * np.pi, np.full(3, np.nan)):
+        assert tolerant_start_out_of_reach(scene, nowhere) is None
+    with pytest.raises(ValueError, match='margin must be a finite clearance'):
+        tolerant_start_out_of_reach(scene, q, margin=-0.1)
+    # Under a margin the proof says so.
+    options = PlannerOptions(verification=VerificationOptions(margin=0.01))
+    assert 'clear by more than 0.01 m' in plan_from(scene, q, options).approach.reason
 
 
 @pytest.mark.parametrize('name, route, preferred', [

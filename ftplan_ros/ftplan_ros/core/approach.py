@@ -437,12 +437,17 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
             again = planner.approach(q, second.theta_s, arc=arc)
             if again.ok:
                 return ReachablePlan(second, again)
-    proved_on = tolerant_start_out_of_reach(scene, q, approach_options.margin)
+    # The plan's starts are clear by its margin, the approach's paths by their own: the
+    # proof takes the smaller, so that it covers both.
+    margin = min(options.verification.margin, approach_options.margin)
+    proved_on = tolerant_start_out_of_reach(scene, q, margin)
     if proved_on is not None:
+        clear = f', clear by more than {margin:g} m' if margin > 0 else ''
         found = Approach(None, Route.NONE, f'no failure-tolerant plan starts where the arm '
                          f'can get to from here (proved on a {proved_on}^3 joint grid: no '
                          f'start that may be failure-tolerant lies in its component of '
-                         f'possibly free cells); to this plan\'s theta_s: {found.reason}')
+                         f'possibly free cells{clear}); to this plan\'s theta_s: '
+                         f'{found.reason}')
     return ReachablePlan(first, found)
 
 

@@ -15,11 +15,14 @@ have: when none lies in the arm's component, no plan can begin where the arm can
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from .cell_classes import classify_cells, supports
+from .certification import LARGEST_ANGLE
+from .collision import CollisionChecker
 from .components import Components, components, layer_components
 from .robot import Robot
 from .scene import Obstacle, Scene
@@ -85,14 +88,20 @@ def tolerant_start_out_of_reach(scene: Scene, q: np.ndarray, margin: float = 0.0
                                 grids: tuple[int, ...] = START_GRIDS) -> int | None:
     """Return the cells per joint of a grid proving that no plan starts within q's reach.
 
-    q (n,) [rad] is where the arm stands; the grids of `grids` cells per joint are tried
-    in turn (`_out_of_reach`). None when none proves it, when they do not apply (not a
-    planar 3R arm among disks, a goal tolerance too fine for them), and for a q that is
-    not finite.
+    q (n,) [rad] is where the arm stands, clear of the obstacles by more than `margin`
+    [m]; the grids of `grids` cells per joint are tried in turn (`_out_of_reach`). None
+    when none proves it, when they do not apply (not a planar 3R arm among disks, a goal
+    tolerance too fine for them), and for a q that is not finite, lies beyond
+    `LARGEST_ANGLE` or is not clear (an arm in collision reaches nothing: its approach
+    says why). Raises ValueError for a margin that is not finite and >= 0.
     """
+    if not (math.isfinite(margin) and margin >= 0.0):
+        raise ValueError(f'margin must be a finite clearance >= 0 [m], got {margin}')
     q = np.asarray(q, dtype=float).reshape(1, -1)
     if scene.task is None or not supports(scene) or q.shape[1] != scene.robot.n_joints \
-            or not np.all(np.isfinite(q)):
+            or not np.all(np.abs(q) <= LARGEST_ANGLE):  # False for NaN too
+        return None
+    if not CollisionChecker(scene.robot, scene.obstacles).min_clearance(q)[0] > margin:
         return None
     return next((cells for cells in grids if fits_goal_tolerance(scene, cells)
                  and _out_of_reach(scene, q, margin, cells)), None)
@@ -104,8 +113,7 @@ def _out_of_reach(scene: Scene, q: np.ndarray, margin: float, cells: int) -> boo
     A plan's θ_s lies in a possibly free cell that may meet G and may put the tool at the
     task start (`TolerantSet`), and every path from q clear by more than `margin` [m]
     stays in the component of possibly free cells holding q's cell: True when no such
-    cell lies in it. False for a q outside the joint limits or in no possibly free cell
-    (it collides: the approach says so).
+    cell lies in it. False for a q outside the joint limits.
     """
     grid = tolerant_set(scene, cells, margin=margin)
     lattice = grid.lattice
