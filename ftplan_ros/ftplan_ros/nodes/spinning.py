@@ -81,6 +81,14 @@ class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
         self._futures.clear()
         return super().shutdown(timeout_sec)
 
+    def spin_until(self, stop: threading.Event) -> None:
+        """Spin until `stop` is set (looked at every `_STOP_POLL` [s]) or the context ends."""
+        try:
+            while not stop.is_set() and self.context.ok():
+                self.spin_once(timeout_sec=_STOP_POLL)
+        except ExternalShutdownException:
+            pass
+
     def _make_handler(self, entity, node, take_from_wait_list):
         task = super()._make_handler(entity, node, take_from_wait_list)
         with self._tasks_lock:
@@ -98,7 +106,8 @@ class BackgroundSpin:
         for node in nodes:
             self.add(node)
         self._stopping = threading.Event()
-        self.thread = threading.Thread(target=self._spin, name=name, daemon=True)
+        self.thread = threading.Thread(target=self.executor.spin_until, args=(self._stopping,),
+                                       name=name, daemon=True)
         self.thread.start()
 
     def add(self, node: Node) -> Node:
@@ -117,13 +126,6 @@ class BackgroundSpin:
         for node in self.nodes:
             node.destroy_node()
 
-    def _spin(self) -> None:
-        try:
-            while not self._stopping.is_set() and self.executor.context.ok():
-                self.executor.spin_once(timeout_sec=_STOP_POLL)
-        except ExternalShutdownException:
-            pass
-
 
 def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
     """Init rclpy, build the node and spin it until Ctrl-C or SIGTERM (every node's main).
@@ -131,8 +133,8 @@ def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = 
     Returns 0, or 2 when the node cannot start (a bad scene file or parameter), after
     one fatal log line.
 
-    The signals only set a flag, which the spin loop reads at least every `_STOP_POLL`
-    [s]. rclpy's own handlers are not installed: its signal thread triggers every
+    The signals only set a flag, which `MultiThreadedExecutor.spin_until` reads at least
+    every `_STOP_POLL` [s]. rclpy's own handlers are not installed: its signal thread triggers every
     executor's guard condition while KeyboardInterrupt, raised in this thread, already
     shuts the executor down and destroys its guard condition; the planner died in
     rcl_trigger_guard_condition (SIGSEGV) about once in 30 stops under load.
@@ -146,10 +148,7 @@ def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = 
     try:
         node = make_node()
         executor.add_node(node)
-        while not stop.is_set() and executor.context.ok():
-            executor.spin_once(timeout_sec=_STOP_POLL)
-    except ExternalShutdownException:
-        pass
+        executor.spin_until(stop)
     except STARTUP_ERRORS as error:
         rclpy.logging.get_logger(name).fatal(f'cannot start: {error}')
         return 2
