@@ -87,16 +87,16 @@ def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
     result = replace(result, stats={'method': PAPER_METHOD} | result.stats)
     if result.feasible or not sheets_apply(scene, options):
         return result
+    # No start passes the necessary condition (eq. 6) for every joint, with starts a
+    # quarter step apart along M_s: no plan has room to start, unless between those
+    # starts. No web is searched; the sheets' grids try to prove that none exists, unless
+    # the question was one given start (it fails the condition: that is all).
+    no_room = result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0
+    if no_room and start_configuration is not None:
+        return result
     sheets = WebSearch(scene, options, report, start_configuration, prefer_starts, checker)
-    if result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0:
-        # No start passes the necessary condition (eq. 6) for every joint, with starts a
-        # quarter step apart along M_s: no plan has room to start, unless between those
-        # starts. No web is searched; the sheets' grids try to prove that none exists,
-        # unless the question was one given start (it fails the condition: that is all).
-        if start_configuration is not None:
-            return result
-        return with_sheets(result, sheets.prove_none(previous=result))
-    return with_sheets(result, sheets.run(previous=result))
+    return with_sheets(result, sheets.prove_none(previous=result) if no_room
+                       else sheets.run(previous=result))
 
 
 def with_sheets(paper: PlanResult, sheets: PlanResult) -> PlanResult:
