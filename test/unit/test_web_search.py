@@ -277,6 +277,17 @@ def test_grids_too_coarse_for_the_goal_tolerance_are_passed_over():
             in result.reason
 
 
+def test_a_fine_goal_tolerance_gets_a_goal_row_fine_enough():
+    """At a goal tolerance of 1 mm (1 m links) the goal row's chords of 0.15 rad strayed
+    1.6 mm from the goal and the self-check failed every web: shorter chords pass it."""
+    scene = load_scene(SCENES / 'crowded_sheets_100.yaml')
+    finer = replace(scene, task=replace(scene.task, goal_tolerance=0.001))
+    result = plan(finer)
+    assert result.feasible and result.stats['method'] == METHOD, result.reason
+    assert result.stats['goal_error_bound_m'] <= 0.001
+    assert_every_lock_recovers(finer, result, 100)
+
+
 def test_the_grid_search_finds_a_shortest_path_through_the_mask():
     """`_bfs` against shortest path lengths on the explicit graph of neighbouring cells."""
     rng = np.random.default_rng(21)

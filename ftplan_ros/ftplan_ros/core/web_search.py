@@ -414,6 +414,7 @@ class _SheetBuilder:
         self.goal_cells = self.lattice.cell_of(goals)[:, self.others]
         self.offsets2 = (gamma[:, self.others] - self.lower2) / self.step2  # [cell units]
         self.free = _TriangleCheck(grid.scene, margin)
+        self.goal_step = _goal_step(grid.scene)
         self.strip_layers = _strip_layers(gamma[:, joint], self.lattice.lower[joint],
                                           self.lattice.step[joint])
         self.splits: dict[int, float] = {}
@@ -517,7 +518,7 @@ class _SheetBuilder:
                 goal_a = goal_b.copy() if a == b else self._goal(a, levels[0], end)
                 goal_a[self.joint] = levels[0]
                 distance = np.max(np.abs(goal_a - goal_b))
-                if (best is None or distance < best[0]) and distance <= _GOAL_STEP and \
+                if (best is None or distance < best[0]) and distance <= self.goal_step and \
                         self._ends_free(mask, end, goal_a, goal_b):
                     best = (distance, goal_a, goal_b)
         if best is None:
@@ -567,7 +568,7 @@ class _SheetBuilder:
         for a in self._goal_candidates(v, self.gamma[j + 1, self.joint]):
             goal = self._goal(a, v, end)
             distance = np.max(np.abs(goal - following))
-            if (best is None or distance < best[0]) and distance <= _GOAL_STEP and \
+            if (best is None or distance < best[0]) and distance <= self.goal_step and \
                     self._ends_free(mask, end, goal, following):
                 best = (distance, goal)
         return None if best is None else best[1]
@@ -657,8 +658,20 @@ def _strip_layers(levels: np.ndarray, lower: float, step: float) -> np.ndarray:
                      np.floor((high - nudge - lower) / step)], axis=1).astype(np.int64)
 
 
-# [rad] largest step between the goals of neighbouring columns (the goal row's chords)
-_GOAL_STEP = 0.15
+def _goal_step(scene: Scene) -> float:
+    """Largest step [rad] between the goals of neighbouring columns (the goal row's chords).
+
+    A chord strays from the goal by the error of its ends (up to 0.9 of the tolerance,
+    `sub_slab_count`) and its sag, which grows with the square of its length and with the
+    reach: 0.15 rad keeps the sag within the rest for a tolerance of 1/300 of the reach
+    (1 cm for 1 m links), and shorter chords keep it there for finer tolerances.
+    """
+    reach = float(scene.robot.tip_lever_arms()[0])
+    return _LONGEST_GOAL_STEP * min(1.0, math.sqrt(scene.task.goal_tolerance / (reach / 300.0)))
+
+
+# [rad] `_goal_step` for goal tolerances of 1/300 of the reach and coarser
+_LONGEST_GOAL_STEP = 0.15
 # [cells] longest straight cut of a route: the self-check quarters a triangle a bounded
 # number of times, so a triangle many cells wide near an obstacle would go uncertified
 _LONGEST_CUT = 16
