@@ -76,9 +76,11 @@ def test_the_installed_planner_serves_another_process(ros, processes):
 def test_four_installed_nodes_drill_across_processes(ros_context, processes):
     """Planner, executor, sim and injector as four processes; the test plans and executes."""
     scene = ['-p', f'scene_file:={FIG3A}']
+    # At 0.5 rad/s the nominal path takes about 3 s: the injector has 1.5 s from half way
+    # to hear the arm there, where 2 rad/s left it 0.35 s, missed twice in 80 loaded runs.
     nodes = {name: processes([installed(name), '--ros-args', '--params-file',
                               PARAMS / f'{name}.yaml', *scene, *extra])
-             for name, extra in [('planner', []), ('executor', ['-p', 'max_joint_speed:=2.0']),
+             for name, extra in [('planner', []), ('executor', ['-p', 'max_joint_speed:=0.5']),
                                  ('sim', ['-p', 'max_joint_speed:=4.0']),
                                  ('injector', ['-p', "drills:=['joint2@0.5']"])]}
     client = PlanClient(context=ros_context)
