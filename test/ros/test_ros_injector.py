@@ -112,3 +112,23 @@ def test_random_drills_lock_only_the_joints_the_plan_tolerates(ros, tmp_path):
         drills.append(injector.drill.joint)
     assert set(drills[:30]) == set(TOLERATED)            # every tolerated joint, elbow never
     assert set(drills[30:]) <= set(JOINTS[:2])
+
+
+def test_a_drill_the_execution_ends_before_is_dropped_not_fired(ros):
+    """The injector learns that the execution reached the goal before it saw the arm at
+    the drill's fraction (no joint state here): the drill is dropped with a warning, and
+    no lock reaches an executor that is no longer executing (it would refuse executions
+    until reset; the injector used to fire then)."""
+    injector = ros.make(InjectorNode, drills=['joint2@0.999'])
+    ros.probe.listen(JointState, '/ftplan/locked_joint')
+    ros.probe.advertise(DiagnosticArray, '/diagnostics', readers=1)
+    wait_for(lambda: injector.lock_publisher.get_subscription_count() > 0)
+    for state in ('approaching', 'nominal', 'done'):
+        values = {'state': state, 'execution': 1, 'plan': '1.0'}
+        ros.probe.publish(DiagnosticArray, '/diagnostics', create_diagnostic_array(
+            [create_diagnostic_status('ftplan_executor: execution', 'OK', state, values)]))
+        wait_for(lambda state=state: injector.state == state, what=f'the injector at {state}')
+    wait_for(lambda: ros.probe.logged('ftplan_injector',
+                                      'dropped drill joint2@0.999: execution 1 became done first'))
+    assert not injector.pending
+    assert ros.probe.received('/ftplan/locked_joint') == []

@@ -10,7 +10,9 @@ gets at most one drill, taken in order from:
   done the fraction F (0..1) of the nominal path's length, measured by projecting
   /joint_states onto /ftplan/plan/trajectory; 'JOINT@Ts' locks it T seconds after the
   execution started (which may fall in the approach to θ_s, where no recovery is
-  guaranteed).
+  guaranteed). A drill not fired when the injector learns that the execution ended
+  (reached the goal, failed) is dropped with a warning: a lock after the goal would test
+  no recovery, and the executor would refuse executions until reset.
 - `random_drills`: then this many executions (-1: all of them) get a Monte Carlo drill,
   a uniformly random joint among those the plan tolerates (the executor's status names
   them, plan_info.py; every joint when it does not) at a uniformly random fraction of
@@ -259,8 +261,6 @@ class InjectorNode(Node):
             return
         if state == 'nominal' and self.drill.fraction == 0.0:
             self._fire('at the start of the nominal path')
-        elif state == 'done' and self.drill.fraction is not None:
-            self._fire('after the nominal phase ended')
         elif state not in _RUNNING:
             self._disarm(f'execution {execution} became {state} first')
 
