@@ -28,6 +28,7 @@ from ftplan_ros.core.web_search import (
     _bfs,
     _greedy_cuts,
     _piece_middles,
+    _triangle_free,
 )
 from ftplan_ros.crowded import RADII, crowded_scene
 
@@ -405,6 +406,60 @@ def test_straight_cuts_stay_in_the_mask_and_within_the_longest_cut():
             assert mask[tuple(np.mod(samples, size).T)].all(), trial
         shortened += len(kept) < len(offsets)
     assert shortened > 60
+
+
+def triangle_meets_cell(corners, cell):
+    """Whether the closed triangle (3, 2) and the closed unit square at `cell` (2,) meet:
+    no separating axis among the square's two and the triangle's three edge normals."""
+    square = np.asarray(cell, dtype=float) + np.array([[0, 0], [1, 0], [0, 1], [1, 1]])
+    edges = np.roll(corners, -1, axis=0) - corners
+    axes = np.vstack([np.eye(2), np.stack([-edges[:, 1], edges[:, 0]], axis=1)])
+    for axis in axes:
+        on_triangle, on_square = corners @ axis, square @ axis
+        if on_triangle.max() < on_square.min() - 1e-12 or \
+                on_square.max() < on_triangle.min() - 1e-12:
+            return False
+    return True
+
+
+def test_a_triangle_is_free_exactly_when_no_cell_it_meets_is_blocked():
+    """`_triangle_free` on random triangles (large, small, thin, on grid lines, leaving a
+    bounded axis) in masks with one blocked cell: a dense sample of the triangle inside
+    the blocked cell makes it not free, and a triangle said not free meets the blocked
+    cell or leaves a bounded axis (exact separating-axis test)."""
+    rng = np.random.default_rng(12)
+    size = 12
+    blocked_hits = 0
+    weights = np.array([(i, j) for i in range(61) for j in range(61 - i)]) / 60.0
+    for trial in range(3000):
+        periodic = rng.random(2) < 0.5
+        span = rng.choice([0.3, 2.0, 6.0, 14.0])
+        corners = rng.uniform(-2.0, size + 2.0, 2) + rng.uniform(-span, span, (3, 2))
+        corners[0] = rng.uniform(-2.0, size + 2.0, 2)
+        if trial % 4 == 0:
+            corners = np.round(corners * 2.0) / 2.0  # on grid lines and cell centres
+        cell = rng.integers(0, size, 2)
+        mask = np.ones((size, size), dtype=bool)
+        mask[tuple(cell)] = False
+        free = _triangle_free(mask, corners[0], corners[1], corners[2], periodic)
+        # Copies of the blocked cell round the periodic axes, near the triangle.
+        shifts = [np.array([i, j]) * size for i in (-2, -1, 0, 1, 2) for j in (-2, -1, 0, 1, 2)
+                  if (i == 0 or periodic[0]) and (j == 0 or periodic[1])]
+        copies = [cell + shift for shift in shifts]
+        points = corners[0] + weights[:, :1] * (corners[1] - corners[0]) \
+            + weights[:, 1:] * (corners[2] - corners[0])
+        off_lines = np.all(np.abs(points - np.round(points)) > 1e-6, axis=1)
+        inside = points[off_lines]
+        sampled = any(np.all(np.floor(inside) == copy, axis=1).any() for copy in copies)
+        leaves = np.any(~periodic & ((inside < 0) | (inside >= size)).any(axis=0))
+        if sampled or leaves:
+            assert not free, trial
+        if not free:
+            blocked_hits += 1
+            low, high = corners.min(axis=0), corners.max(axis=0)
+            beyond = np.any(~periodic & ((low < -1e-9) | (high > size + 1e-9)))
+            assert beyond or any(triangle_meets_cell(corners, copy) for copy in copies), trial
+    assert 300 < blocked_hits < 2700
 
 
 def test_a_scene_only_the_finest_grid_solves_is_planned_there():
