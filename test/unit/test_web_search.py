@@ -460,6 +460,10 @@ def test_a_triangle_is_free_exactly_when_no_cell_it_meets_is_blocked():
             beyond = np.any(~periodic & ((low < -1e-9) | (high > size + 1e-9)))
             assert beyond or any(triangle_meets_cell(corners, copy) for copy in copies), trial
     assert 300 < blocked_hits < 2700
+    mask = np.ones((size, size), dtype=bool)
+    for bad in (np.nan, np.inf):
+        assert not _triangle_free(mask, np.array([1.0, 1.0]), np.array([2.0, bad]),
+                                  np.array([3.0, 1.0]), np.ones(2, dtype=bool))
 
 
 def test_a_scene_only_the_finest_grid_solves_is_planned_there():

@@ -749,10 +749,13 @@ def _triangle_free(mask, a, b, c, periodic):
     second axis from the least to the greatest of its corners in the band and its edges'
     crossings of the band's two lines; every cell of that reach is checked. Cells the
     triangle meets by less than a billionth of a cell (a boundary it runs along) are
-    left out, as `_cut_free` leaves out such pieces.
+    left out, as `_cut_free` leaves out such pieces. A corner that is not finite is not
+    free.
     """
     corners = np.empty((3, 2))
     corners[0], corners[1], corners[2] = a, b, c
+    if not np.all(np.isfinite(corners)):
+        return False
     low, high = corners[:, 0].min(), corners[:, 0].max()
     first = int(np.floor(low + _SLIVER))
     last = max(first, int(np.ceil(high - _SLIVER)) - 1)
