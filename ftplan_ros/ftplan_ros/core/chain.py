@@ -62,7 +62,7 @@ class ChainModel:
     def frames(self, thetas: np.ndarray) -> np.ndarray:
         """Frames (..., n+2, 4, 4) in the base frame: base, links 1..n, tool."""
         thetas = np.asarray(thetas, dtype=float)
-        flat = np.ascontiguousarray(thetas.reshape(-1, self.n_joints))
+        flat = np.require(thetas.reshape(-1, self.n_joints), requirements='CW')  # as warmed
         out = kernels.chain_frames(self.parameters, flat)
         return out.reshape(thetas.shape[:-1] + out.shape[1:])
 

@@ -234,7 +234,8 @@ class CollisionChecker:
         needed = np.broadcast_to(np.asarray(needed, dtype=float), (len(thetas), self.n_channels))
         if self.planar_disks is not None:  # exact in one compiled pass: no chunks, no tiers
             *arrays, cap = self.planar_disks
-            clearance = planar_link_clearances(*arrays, np.ascontiguousarray(thetas))
+            # Writable too: numba compiles a kernel per array flag, and the warm-up loads one.
+            clearance = planar_link_clearances(*arrays, np.require(thetas, requirements='CW'))
             return np.minimum(clearance, cap, out=clearance)
         out = np.full((len(thetas), self.n_channels), np.inf)
         if self.n_channels == 0 or len(thetas) == 0:

@@ -35,8 +35,9 @@ def load_kernels(robot: Robot) -> None:
     if redundancy >= 1:
         traced = robot if redundancy == 1 else FrozenJoints(
             robot, tuple(range(redundancy - 1)), tuple(theta[:redundancy - 1]))
+        # Four seeds: one alone may not converge (the 4-joint arm's), which traces nothing.
         trace_self_motion_manifolds(traced, traced.forward_kinematics(theta[redundancy - 1:]),
-                                    np.random.default_rng(0), ManifoldOptions(seeds=1))
+                                    np.random.default_rng(0), ManifoldOptions(seeds=4))
     near = tuple(float(v) for v in robot.skeleton(theta)[-1])  # the tool: within reach
     sphere = Obstacle('sphere', near, radius=0.1)
     corners = np.stack([theta, theta + 0.01, theta - 0.01])[None]

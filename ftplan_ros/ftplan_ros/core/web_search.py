@@ -47,6 +47,7 @@ import numpy as np
 from .angles import wrap_angle, wrap_steps
 from .cell_classes import disk_arrays, link_lever_arms, supports, triangle_free
 from .collision import CollisionChecker
+from .components import components
 from .failure_surface import FailureSurface
 from .manifolds import project_to_preimage
 from .options import PlannerOptions
@@ -412,7 +413,8 @@ class _SheetBuilder:
         self.m = escape.sub_slabs
         self.slab_first = np.searchsorted(slabs[self.by_slab], np.arange(self.size * self.m + 1))
         self.goal_cells = self.lattice.cell_of(goals)[:, self.others]
-        self.offsets2 = (gamma[:, self.others] - self.lower2) / self.step2  # [cell units]
+        self.offsets2 = np.ascontiguousarray(  # [cell units], rows as the kernels were warmed
+            (gamma[:, self.others] - self.lower2) / self.step2)
         self.free = _TriangleCheck(grid.scene, margin)
         self.goal_step = _goal_step(grid.scene)
         self.strip_layers = _strip_layers(gamma[:, joint], self.lattice.lower[joint],
@@ -1080,6 +1082,8 @@ def load_sheet_kernels() -> None:
     proves_no(grid)  # the liberal side's kernels too
     pooled_tolerant_set(grid)
     mask = grid.classes.certified
+    components(mask, grid.lattice.periodic).at(np.zeros((1, 3), dtype=np.int64))
+    _wrap_index(0, grid.lattice.periodic[0], 4)  # as the builders call it, from Python
     _bfs(mask, grid.lattice.periodic, np.zeros((1, 3), dtype=np.int64), mask)
     _bfs(mask[0], grid.lattice.periodic[1:], np.zeros((1, 2), dtype=np.int64), mask[0])
     _route_cells(np.array([[0.0, 0.0], [1.0, 1.0]]), np.ones(2, dtype=np.bool_), 4)
