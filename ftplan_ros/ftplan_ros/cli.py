@@ -4,7 +4,7 @@
     ftplan drill SCENE.yaml [--trials N] [--seed S] [--png MOTION.png] [--json OUT.json]
     ftplan figure SCENE.yaml [--out DIR]
     ftplan bench [--robot planar3r|panda|iiwa14] [--scenes N] [--seed S] [--cells C]
-                 [--crowded-cells C]
+                 [--crowded-cells C] [--grid-baseline N]
                  [--json OUT.json]
     ftplan study SPEC.yaml --out DIR [--scheduler ADDRESS] [--workers N]
 
@@ -143,6 +143,9 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument('--crowded-cells', type=int, default=128,
                        help='planar3r: cells per joint of the grid that keeps a plan in the '
                        'crowded scenes as they are built (128)')
+    bench.add_argument('--grid-baseline', type=int, default=0, metavar='N',
+                       help='planar3r: also time the exhaustive grid planner on N^3 cell '
+                       'centres (180: 2 deg; 16 to 256; 0, the default: not run)')
     bench.add_argument('--json', type=Path, help='write every measurement here')
     bench.set_defaults(run=_bench_command)
 
@@ -263,12 +266,14 @@ def _bench_command(args: argparse.Namespace) -> int:
         value = getattr(args, flag)
         _at_least(value, 16, f'--{flag.replace("_", "-")}', 256)
     _at_least(args.seed, 0, '--seed')
+    if args.grid_baseline:
+        _at_least(args.grid_baseline, 16, '--grid-baseline', 256)
     if args.robot != 'planar3r':
         from .spatial_bench import run_spatial_benchmark
         return run_spatial_benchmark(args.robot, args.scenes, args.seed, args.json, Progress())
     from .recall_bench import run_recall_benchmark
     return run_recall_benchmark(args.scenes, args.seed, args.cells, args.crowded_cells,
-                                args.json, Progress())
+                                args.json, Progress(), args.grid_baseline)
 
 
 def _study_command(args: argparse.Namespace) -> int:

@@ -14,7 +14,10 @@ and goal poses while a plan still exists; crowded.py). For each scene, in one ru
   would prove the guarantee false.
 
 Recall is the share of the reference's YES scenes the planner solves. Times are p50/p95
-within this run; the ratio is the reference's p50 over the planner's.
+within this run; the ratio is the reference's p50 over the planner's. With a grid baseline
+(`--grid-baseline N`) the exhaustive grid planner `brute_force.grid_plan` also runs on N^3
+cells (180: 2 deg, the baseline the issue first measured against); it samples cell centres,
+so its answers prove nothing, and the table gives its p50 and the ratio to it besides.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import numpy as np
 
 from .bench import random_scene, referee_agrees
 from .core import CollisionChecker, ManifoldCache, load_kernels, plan
+from .core.brute_force import grid_plan
 from .core.reference import Existence, decide_existence
 from .core.scene import Scene, scene_to_dict
 from .crowded import crowded_scene
@@ -52,11 +56,16 @@ class RecallRun:
     proved_infeasible: bool  # the planner itself proved that no plan exists
     reason: str
     scene: dict
+    grid_baseline_s: float | None = None  # the grid baseline's time, when it ran
+    grid_baseline_feasible: bool | None = None
 
 
 def run_recall_benchmark(scenes: int, seed: int, cells: int, crowded_cells: int,
-                         json_path: Path | None, progress) -> int:
-    """Run `scenes` scenes per group; print the tables; return 1 on a false guarantee."""
+                         json_path: Path | None, progress, grid_baseline: int = 0) -> int:
+    """Run `scenes` scenes per group; print the tables; return 1 on a false guarantee.
+
+    `grid_baseline` > 0: also time the grid baseline on that many cells per joint.
+    """
     load_kernels(random_scene(np.random.default_rng(0), 0).robot)  # not part of the times
     made = []
     for group in GROUPS:
@@ -71,9 +80,9 @@ def run_recall_benchmark(scenes: int, seed: int, cells: int, crowded_cells: int,
     progress.begin()
     runs = []
     for done, (group, k, scene) in enumerate(made, start=1):
-        runs.append(run_scene(scene, group, k, cells))
+        runs.append(run_scene(scene, group, k, cells, grid_baseline))
         progress.count(done, len(made), 'scenes')
-    print(summarize(runs, cells))
+    print(summarize(runs, cells, grid_baseline))
     if json_path is not None:
         json_path.parent.mkdir(parents=True, exist_ok=True)
         json_path.write_text(json.dumps([asdict(run) for run in runs], indent=1,
@@ -81,8 +90,12 @@ def run_recall_benchmark(scenes: int, seed: int, cells: int, crowded_cells: int,
     return 1 if any(r.refuted for r in runs) else 0
 
 
-def run_scene(scene: Scene, group: str, index: int, cells: int) -> RecallRun:
-    """Decide the scene with the reference, plan it cold and warm, referee a plan."""
+def run_scene(scene: Scene, group: str, index: int, cells: int,
+              grid_baseline: int = 0) -> RecallRun:
+    """Decide the scene with the reference, plan it cold and warm, referee a plan.
+
+    `grid_baseline` > 0: run the grid baseline on that many cells per joint too.
+    """
     answer = decide_existence(scene, cells)
     cache = ManifoldCache()
     started = time.perf_counter()
@@ -99,11 +112,25 @@ def run_scene(scene: Scene, group: str, index: int, cells: int) -> RecallRun:
     return RecallRun(group, index, len(scene.obstacles), answer.existence.value, answer.time_s,
                      result.feasible, result.stats.get('method', '') if result.feasible else '',
                      cold, warm, refuted, bool(result.stats.get('proved_infeasible', False)),
-                     result.reason, scene_to_dict(scene))
+                     result.reason, scene_to_dict(scene), *_grid_baseline(scene, grid_baseline))
 
 
-def summarize(runs: list[RecallRun], cells: int) -> str:
-    """Tabulate recall and false guarantees, then times per group and method."""
+def _grid_baseline(scene: Scene, cells: int) -> tuple[float | None, bool | None]:
+    """Time [s] and answer of `grid_plan` on cells^3 (None, None when cells is 0)."""
+    if cells == 0:
+        return None, None
+    started = time.perf_counter()
+    answer = grid_plan(CollisionChecker(scene.robot, scene.obstacles),
+                       np.asarray(scene.task.start), np.asarray(scene.task.goal), cells)
+    return time.perf_counter() - started, answer.feasible
+
+
+def summarize(runs: list[RecallRun], cells: int, grid_baseline: int = 0) -> str:
+    """Tabulate recall and false guarantees, then times per group and method.
+
+    With `grid_baseline` cells per joint, the grid baseline's p50 and ratio too, and its
+    answers against the reference's.
+    """
     lines = [f'reference: {cells}^3 joint grid, G from inside (YES proved) and outside '
              '(NO proved); planner cold (manifolds traced) and warm (cached)',
              f'{"group":<10}{"scenes":>7}{"yes":>5}{"no":>5}{"unsure":>7}{"found":>7}'
@@ -120,8 +147,10 @@ def summarize(runs: list[RecallRun], cells: int) -> str:
             f'{sum(r.method == "paper_surface" for r in found):>7}'
             f'{sum(r.method == "recovery_sheets" for r in found):>8}'
             f'{sum(r.refuted for r in rows):>7}{proved:>11}')
+    baseline = f'grid {grid_baseline}^3'
     lines += ['', f'{"times p50 / p95 [ms]":<28}{"scenes":>7}{"cold":>16}{"warm":>16}'
-              f'{"reference":>18}{"ref/cold p50":>14}']
+              f'{"reference":>18}{"ref/cold p50":>14}'
+              + (f'{baseline + " p50":>18}{"grid/cold p50":>15}' if grid_baseline else '')]
     selections = []
     for name, rows in _groups(runs):
         selections += [(f'{name}: all', rows),
@@ -135,12 +164,24 @@ def summarize(runs: list[RecallRun], cells: int) -> str:
             continue
         cold, warm, ref = (np.array([getattr(r, a) for r in rows]) * 1e3
                            for a in ('cold_s', 'warm_s', 'reference_s'))
-        ratio = np.median(ref) / np.median(cold)
-        lines.append(f'{name:<28}{len(rows):>7}{_p(cold):>16}{_p(warm):>16}{_p(ref):>18}'
-                     f'{ratio:>13.{0 if ratio >= 10 else 1}f}x')
+        line = (f'{name:<28}{len(rows):>7}{_p(cold):>16}{_p(warm):>16}{_p(ref):>18}'
+                f'{_ratio(np.median(ref) / np.median(cold)):>14}')
+        if grid_baseline:
+            grid = np.median([r.grid_baseline_s for r in rows]) * 1e3
+            line += f'{grid:>18.0f}{_ratio(grid / np.median(cold)):>15}'
+        lines.append(line)
     lines.append(f'false guarantees (a plan the reference or the referee refutes): '
                  f'{sum(r.refuted for r in runs)} (must be 0)')
+    if grid_baseline:
+        says = {verdict: f'{sum(r.grid_baseline_feasible for r in runs if r.existence == verdict)}'
+                f' of {sum(r.existence == verdict for r in runs)}' for verdict in ('yes', 'no')}
+        lines.append(f'{baseline} baseline (cell centres, no proof): a plan exists on '
+                     f'{says["yes"]} YES scenes and on {says["no"]} NO scenes')
     return '\n'.join(lines)
+
+
+def _ratio(value: float) -> str:
+    return f'{value:.{0 if value >= 10 else 1}f}x'
 
 
 def _groups(runs: list[RecallRun]) -> list[tuple[str, list[RecallRun]]]:
