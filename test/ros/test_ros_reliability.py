@@ -320,3 +320,34 @@ def test_the_executor_takes_the_planners_approach_that_ends_whole_turns_from_the
     assert np.allclose(turns, np.round(turns), atol=1e-9) and np.any(np.round(turns))
     done = state_of(ros, execute(ros), 'done')
     assert done.values['approach'].startswith('by the path given (')
+
+
+def test_a_finer_proof_grid_set_on_the_planner_proves_a_narrow_gap(ros):
+    """out_of_reach_narrow: from the sim's default start no approach is found. With
+    `approach_proof_cells` 384 the plan's status says that a grid proved no plan starts
+    within the arm's reach; with the default (128) it cannot tell. Other sizes are refused."""
+    narrow = Path(__file__).parent / 'scenes' / 'out_of_reach_narrow.yaml'
+    planner = ros.make(PlannerNode, narrow, approach_time=0.2, approach_proof_cells=384)
+    ros.make(SimNode, narrow)
+    ros.probe.listen(JointState, '/joint_states')
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    assert _approach_of_a_plan(ros).startswith(
+        'no failure-tolerant plan starts where the arm can get to from here (proved on a '
+        '384^3 joint grid')
+    assert planner.set_parameters([Parameter('approach_proof_cells', value=128)])[0].successful
+    assert _approach_of_a_plan(ros).startswith('no collision-free joint move found')
+    refused = planner.set_parameters([Parameter('approach_proof_cells', value=200)])[0]
+    assert not refused.successful and 'must be one of 64, 128, 256, 384' in refused.reason
+
+
+def _approach_of_a_plan(ros) -> str:
+    """Plan the scene's task from where the arm stands; return what the status says of
+    the approach."""
+    client = PlanClient(context=ros.context)
+    try:
+        motion = client.plan(timeout=60.0)
+    finally:
+        client.destroy_node()
+    return wait_for(lambda: [s for s in ros.probe.statuses(PLAN_STATUS)
+                             if s.values.get('stamp') == motion.stamp],
+                    what='the plan status')[0].values['approach']

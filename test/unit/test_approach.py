@@ -7,6 +7,7 @@ import pytest
 from ftplan_testing import REPO, SCENES, paper_scene
 
 from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, task_errors
+from ftplan_ros.core import approach as approach_module
 from ftplan_ros.core.approach import (
     ApproachOptions,
     ApproachPlanner,
@@ -14,7 +15,11 @@ from ftplan_ros.core.approach import (
     plan_from,
     straight_move_ends,
 )
-from ftplan_ros.core.free_components import FreeComponents, tolerant_start_out_of_reach
+from ftplan_ros.core.free_components import (
+    FreeComponents,
+    proof_grids,
+    tolerant_start_out_of_reach,
+)
 from ftplan_ros.core.manifolds import project_to_preimage, trace_self_motion_manifolds
 from ftplan_ros.core.paths import densify
 from ftplan_ros.core.scene import Obstacle
@@ -198,6 +203,37 @@ def test_where_no_plan_starts_within_reach_the_approach_says_so_and_why():
     # Under a margin the proof says so.
     options = PlannerOptions(verification=VerificationOptions(margin=0.01))
     assert 'clear by more than 0.01 m' in plan_from(scene, q, options).approach.reason
+
+
+def test_the_proof_comes_before_the_other_arcs_are_searched(monkeypatch):
+    """Once a grid proves that no plan starts within reach, joint moves to the other arcs
+    of M_s^F (RRT-Connect, seconds) cannot succeed: they are not tried."""
+    scene = load_scene(SCENES_OF_TESTS / 'out_of_reach.yaml')
+
+    def searched(*args, **kwargs):
+        raise AssertionError('the other arcs were searched after the proof')
+
+    monkeypatch.setattr(approach_module, '_joint_move_arcs', searched)
+    reason = plan_from(scene, clearest_start(scene)).approach.reason
+    assert reason.startswith('no failure-tolerant plan starts where the arm can get to')
+
+
+def test_a_narrow_gap_is_proved_on_the_finest_grid_the_options_allow():
+    """In out_of_reach_narrow the default grids (up to 128^3) cannot separate the arm from
+    the starts that may be failure-tolerant; `proof_cells=384` does."""
+    scene = load_scene(SCENES_OF_TESTS / 'out_of_reach_narrow.yaml')
+    q = clearest_start(scene)
+    found = {cells: plan_from(scene, q, approach_options=ApproachOptions(
+        rrt_time=0.2, proof_cells=cells)) for cells in (128, 384)}
+    assert all(r.result.feasible and not r.approach.ok for r in found.values())
+    assert found[128].approach.reason.startswith('no collision-free joint move found')
+    assert found[384].approach.reason.startswith(
+        'no failure-tolerant plan starts where the arm can get to from here (proved on a '
+        '384^3 joint grid')
+    assert tolerant_start_out_of_reach(scene, q, grids=(256,)) is None
+    assert proof_grids(256) == (64, 128, 256)
+    with pytest.raises(ValueError, match='one of'):
+        proof_grids(100)
 
 
 @pytest.mark.parametrize('name, route, preferred', [

@@ -42,7 +42,13 @@ import numpy as np
 from .angles import configuration_difference
 from .certification import certify_polylines
 from .collision import CollisionChecker
-from .free_components import GRID_CELLS, FreeComponents, tolerant_start_out_of_reach
+from .free_components import (
+    GRID_CELLS,
+    START_GRIDS,
+    FreeComponents,
+    proof_grids,
+    tolerant_start_out_of_reach,
+)
 from .manifolds import (
     ManifoldOptions,
     mark_obstacle_free,
@@ -91,6 +97,7 @@ class ApproachOptions:
     arc_tolerance: float = 0.05         # a configuration this close to the arc is on it [rad]
     ik_seeds: int = 64                  # `path_to_goal`: Newton seeds in the failure plane
     goal_candidates: int = 4            # `path_to_goal`: nearest goal configurations tried
+    proof_cells: int = START_GRIDS[-1]  # `plan_from`: finest grid of the out-of-reach proof
     manifold: ManifoldOptions = field(default_factory=ManifoldOptions)
 
 
@@ -408,10 +415,12 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
 
     With one degree of redundancy and the tool at x_s, `core.plan` searches the starts on
     the obstacle-free arc of M_s through q first. When the plan's θ_s cannot be approached
-    from q (it lies on another arc and no joint move gets there), the free arcs of M_s that
-    a joint move from q reaches are preferred in a second plan. The result is the plan
-    whose θ_s is approached, else the first; `approach.ok` says whether the arm gets there,
-    and its reason whether a grid proved that no plan starts within the arm's reach.
+    from q (it lies on another arc and no joint move gets there), joint grids up to
+    `approach_options.proof_cells` per joint try to prove that no plan starts within the
+    arm's reach; unless one does, the free arcs of M_s that a joint move from q reaches
+    are preferred in a second plan. The result is the plan whose θ_s is approached, else
+    the first; `approach.ok` says whether the arm gets there, and its reason whether a grid
+    proved that no plan starts within the arm's reach.
     """
     options = options or PlannerOptions()
     approach_options = approach_options or ApproachOptions(
@@ -428,6 +437,20 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
     found = planner.approach(q, first.theta_s, arc=arc)
     if found.ok:
         return ReachablePlan(first, found)
+    # Before the other arcs' joint moves (seconds of RRT-Connect), which a proof makes
+    # needless. The plan's starts are clear by its margin, the approach's paths by their
+    # own: the proof takes the smaller, so that it covers both.
+    (progress or (lambda line: None))('trying to prove that no plan starts within reach')
+    margin = min(options.verification.margin, approach_options.margin)
+    proved_on = tolerant_start_out_of_reach(scene, q, margin,
+                                            proof_grids(approach_options.proof_cells))
+    if proved_on is not None:
+        clear = f', clear by more than {margin:g} m' if margin > 0 else ''
+        return ReachablePlan(first, Approach(
+            None, Route.NONE, f'no failure-tolerant plan starts where the arm can get to '
+            f'from here (proved on a {proved_on}^3 joint grid: no start that may be '
+            f'failure-tolerant lies in its component of possibly free cells{clear}); to '
+            f'this plan\'s theta_s: {found.reason}'))
     arcs = _joint_move_arcs(planner, q, first, exclude=[first.theta_s] + ([q] if arc is None
                                                                           else [arc[0]]))
     if arcs:
@@ -437,17 +460,6 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
             again = planner.approach(q, second.theta_s, arc=arc)
             if again.ok:
                 return ReachablePlan(second, again)
-    # The plan's starts are clear by its margin, the approach's paths by their own: the
-    # proof takes the smaller, so that it covers both.
-    margin = min(options.verification.margin, approach_options.margin)
-    proved_on = tolerant_start_out_of_reach(scene, q, margin)
-    if proved_on is not None:
-        clear = f', clear by more than {margin:g} m' if margin > 0 else ''
-        found = Approach(None, Route.NONE, f'no failure-tolerant plan starts where the arm '
-                         f'can get to from here (proved on a {proved_on}^3 joint grid: no '
-                         f'start that may be failure-tolerant lies in its component of '
-                         f'possibly free cells{clear}); to this plan\'s theta_s: '
-                         f'{found.reason}')
     return ReachablePlan(first, found)
 
 

@@ -31,9 +31,11 @@ from .tolerant_set import fits_goal_tolerance, tolerant_set
 # Cells per joint. The proof holds at any resolution; a finer grid proves more pairs
 # apart (narrower gaps), a coarser one is quicker: 64^3 classifies in 1-4 ms.
 GRID_CELLS = 64
-# Cells per joint of the grids `tolerant_start_out_of_reach` tries, coarse first: 64^3
-# takes about 10 ms, 128^3 (the recovery sheets' first grid) about 40.
-START_GRIDS = (64, 128)
+# Cells per joint of the grids `tolerant_start_out_of_reach` may try, coarse first: 64^3
+# takes about 10 ms, 128^3 (the recovery sheets' first grid) about 40, 256^3 about 0.3 s
+# and 120 MB more, 384^3 about 0.9 s and 400 MB (a narrow gap may need it).
+PROOF_GRIDS = (64, 128, 256, 384)
+START_GRIDS = PROOF_GRIDS[:2]  # the default: cheap enough for every failed request
 
 
 class FreeComponents:
@@ -82,6 +84,14 @@ class FreeComponents:
         if joint not in self._layers:
             self._layers[joint] = layer_components(self.possible, joint, self.lattice.periodic)
         return self._layers[joint]
+
+
+def proof_grids(finest: int) -> tuple[int, ...]:
+    """Return the grids of `PROOF_GRIDS` up to `finest` cells per joint (one of them)."""
+    if finest not in PROOF_GRIDS:
+        raise ValueError(f'the finest proof grid must be one of {PROOF_GRIDS} cells per '
+                         f'joint, got {finest}')
+    return PROOF_GRIDS[:PROOF_GRIDS.index(finest) + 1]
 
 
 def tolerant_start_out_of_reach(scene: Scene, q: np.ndarray, margin: float = 0.0,

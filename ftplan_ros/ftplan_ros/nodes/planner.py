@@ -85,6 +85,7 @@ from ftplan_ros.core import (
     plan,
 )
 from ftplan_ros.core.approach import Approach, ApproachOptions, plan_from
+from ftplan_ros.core.free_components import PROOF_GRIDS, START_GRIDS
 from ftplan_ros.core.planner import check_plannable
 from ftplan_ros.core.scene import (
     DEFAULT_GOAL_TOLERANCE,
@@ -200,9 +201,15 @@ class PlannerNode(Node):
                 'approach on /ftplan/plan/approach.')
         declare(self, 'approach_time', 1.0,
                 'Budget [s] of each of the three RRT-Connect attempts of an approach.')
+        declare(self, 'approach_proof_cells', START_GRIDS[-1],
+                'Cells per joint of the finest grid that may prove no failure-tolerant plan '
+                'starts within the arm\'s reach, when no approach is found (planar 3R arms '
+                f'among disks): one of {", ".join(map(str, PROOF_GRIDS))}; finer proves '
+                'narrower gaps but takes longer and more memory (384: about 1 s and 0.4 GB).')
         validators = {'max_joint_speed': positive, 'margin': non_negative,
                       'seed': non_negative, 'plan_timeout': positive,
                       'approach_time': positive,
+                      'approach_proof_cells': _check_proof_cells,
                       'joint_space_frame': lambda v: None if v else 'must not be empty',
                       'task_kind': self._check_task_kind,
                       'orientation_tolerance': non_negative,
@@ -432,7 +439,8 @@ class PlannerNode(Node):
         if q is None or not self.get_parameter('approach').value:
             return plan(scene, options, rng, progress, cache=self.cache), None
         reachable = plan_from(scene, q, options, rng, progress, self.cache, ApproachOptions(
-            margin=margin, rrt_time=float(self.get_parameter('approach_time').value)))
+            margin=margin, rrt_time=float(self.get_parameter('approach_time').value),
+            proof_cells=int(self.get_parameter('approach_proof_cells').value)))
         return reachable.result, reachable.approach
 
     def _request_scene(self, request: GetPlan.Request) -> tuple[Scene, np.ndarray | None]:
@@ -579,6 +587,13 @@ class PlannerNode(Node):
                 return
             self.diagnostics.report('markers', 'ERROR', f'could not publish markers: {error!r}',
                                     log=True)
+
+
+def _check_proof_cells(value) -> str | None:
+    """Validate `approach_proof_cells`: one of the grids the proof may take."""
+    if isinstance(value, bool) or value not in PROOF_GRIDS:
+        return f'must be one of {", ".join(map(str, PROOF_GRIDS))}, got {value!r}'
+    return None
 
 
 def display_web(paths: np.ndarray, most: int = MARKER_WEB_SIZE) -> np.ndarray:
