@@ -97,6 +97,7 @@ from .params import (
     add_validators,
     check_startup_parameters,
     declare,
+    destroyed_if_start_fails,
     positive,
 )
 from .plan_info import PLANNER_STATUS, PlanInfos, join_names, read_plan_info
@@ -186,32 +187,33 @@ class ExecutorNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(EXECUTOR_NODE, **kwargs)
-        self.diagnostics = Diagnostics(self)
-        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
-        self._declare_parameters()
-        self.scene: Scene | None = None
-        self.names: list[str] = []
-        self.state = State.IDLE
-        self.plan: HeldPlan | None = None
-        self.plan_infos = PlanInfos()
-        self.execution: Execution | None = None
-        self.executions = 0
-        self.locks = JointLocks([])  # locked, not yet repaired: the one place (locks.py)
-        self.q: np.ndarray | None = None
-        self._previous_q: np.ndarray | None = None
-        self._last_joint_state = 0.0  # monotonic [s] of the last good joint state
-        self._last_motion = 0.0  # monotonic [s] of the last joint state that moved
-        self._last_rejection_report = 0.0
-        self._obstacles = ObstacleSet(None)
-        self._start_msg: JointState | None = None
-        self._trajectory_msg: JointTrajectory | None = None
-        self._surface_msg: Float64MultiArray | None = None
-        self._approach_msg: JointTrajectory | None = None
-        self._last_status = 0.0
-        if self.source.scene is not None:
-            self._use_scene(self.source.scene)
-        self._create_interfaces()
-        self.report_status('waiting for a plan')
+        with destroyed_if_start_fails(self):
+            self.diagnostics = Diagnostics(self)
+            self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+            self._declare_parameters()
+            self.scene: Scene | None = None
+            self.names: list[str] = []
+            self.state = State.IDLE
+            self.plan: HeldPlan | None = None
+            self.plan_infos = PlanInfos()
+            self.execution: Execution | None = None
+            self.executions = 0
+            self.locks = JointLocks([])  # locked, not yet repaired: the one place (locks.py)
+            self.q: np.ndarray | None = None
+            self._previous_q: np.ndarray | None = None
+            self._last_joint_state = 0.0  # monotonic [s] of the last good joint state
+            self._last_motion = 0.0  # monotonic [s] of the last joint state that moved
+            self._last_rejection_report = 0.0
+            self._obstacles = ObstacleSet(None)
+            self._start_msg: JointState | None = None
+            self._trajectory_msg: JointTrajectory | None = None
+            self._surface_msg: Float64MultiArray | None = None
+            self._approach_msg: JointTrajectory | None = None
+            self._last_status = 0.0
+            if self.source.scene is not None:
+                self._use_scene(self.source.scene)
+            self._create_interfaces()
+            self.report_status('waiting for a plan')
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,

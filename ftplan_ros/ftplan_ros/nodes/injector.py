@@ -56,6 +56,7 @@ from .params import (
     check_startup_parameters,
     declare,
     declare_array,
+    destroyed_if_start_fails,
     non_negative,
 )
 from .plan_info import split_names
@@ -124,55 +125,56 @@ class InjectorNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(INJECTOR_NODE, **kwargs)
-        self.diagnostics = Diagnostics(self)
-        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
-        self.scene = self.source.scene
-        self.names = None if self.scene is None else list(self.scene.robot.joint_names)
-        declare_array(self, 'drills', Parameter.Type.STRING_ARRAY,
-                      'Scheduled drills, one per execution: JOINT@FRACTION of the nominal '
-                      'path (0..1) or JOINT@SECONDSs after the execution starts.')
-        declare(self, 'random_drills', 0,
-                'Executions (after the scheduled ones) that get a random drill; -1: all.')
-        declare(self, 'seed', 0, 'Seed of the random drills.')
-        declare(self, 'lock_now', '',
-                'Set to a joint name to publish one lock event at once (then cleared).')
-        declare(self, 'executor_status', f'{EXECUTOR_NODE}: execution',
-                'Name of the executor\'s execution status on /diagnostics.')
-        validators = {
-            'drills': self._check_drills,
-            'random_drills': lambda v: None if v >= -1 else f'must be >= -1, got {v}',
-            'seed': non_negative,
-            'lock_now': self._check_lock_now,
-        }
-        check_startup_parameters(self, validators)
-        add_validators(self, validators)
-        self.add_post_set_parameters_callback(self.parameters_callback)
+        with destroyed_if_start_fails(self):
+            self.diagnostics = Diagnostics(self)
+            self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+            self.scene = self.source.scene
+            self.names = None if self.scene is None else list(self.scene.robot.joint_names)
+            declare_array(self, 'drills', Parameter.Type.STRING_ARRAY,
+                          'Scheduled drills, one per execution: JOINT@FRACTION of the nominal '
+                          'path (0..1) or JOINT@SECONDSs after the execution starts.')
+            declare(self, 'random_drills', 0,
+                    'Executions (after the scheduled ones) that get a random drill; -1: all.')
+            declare(self, 'seed', 0, 'Seed of the random drills.')
+            declare(self, 'lock_now', '',
+                    'Set to a joint name to publish one lock event at once (then cleared).')
+            declare(self, 'executor_status', f'{EXECUTOR_NODE}: execution',
+                    'Name of the executor\'s execution status on /diagnostics.')
+            validators = {
+                'drills': self._check_drills,
+                'random_drills': lambda v: None if v >= -1 else f'must be >= -1, got {v}',
+                'seed': non_negative,
+                'lock_now': self._check_lock_now,
+            }
+            check_startup_parameters(self, validators)
+            add_validators(self, validators)
+            self.add_post_set_parameters_callback(self.parameters_callback)
 
-        self.queue = [parse_drill(text, self.names) for text in array_parameter(self, 'drills')]
-        self._restart_random()
-        self.execution: int | None = None
-        self.state = ''
-        self.drill: Drill | None = None
-        self.pending = False
-        self.nominal: np.ndarray | None = None
-        self.tolerated: tuple[str, ...] = ()  # of the execution's plan, from its status
-        self._trajectory_msg: JointTrajectory | None = None
-        self._drill_timer = None
-        self._lock_now_clearer = self.create_timer(0.0, self._clear_lock_now)
-        self._lock_now_clearer.cancel()
+            self.queue = [parse_drill(text, self.names) for text in array_parameter(self, 'drills')]
+            self._restart_random()
+            self.execution: int | None = None
+            self.state = ''
+            self.drill: Drill | None = None
+            self.pending = False
+            self.nominal: np.ndarray | None = None
+            self.tolerated: tuple[str, ...] = ()  # of the execution's plan, from its status
+            self._trajectory_msg: JointTrajectory | None = None
+            self._drill_timer = None
+            self._lock_now_clearer = self.create_timer(0.0, self._clear_lock_now)
+            self._lock_now_clearer.cancel()
 
-        self.lock_publisher = self.create_publisher(JointState, LOCKED_JOINT, EVENT_QOS_DEPTH)
-        self.status_subscription = self.create_subscription(
-            DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, EVENT_QOS_DEPTH)
-        self.joint_state_subscription = self.create_subscription(
-            JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
-        self.trajectory_subscription = self.create_subscription(
-            JointTrajectory, TRAJECTORY, self.trajectory_callback, LATCHED_QOS)
-        if self.queue or self.random_left:
-            self.get_logger().info(f'drills: {[str(d) for d in self.queue]}, then '
-                                   f'{self.random_left} random (seed {self._seed})')
+            self.lock_publisher = self.create_publisher(JointState, LOCKED_JOINT, EVENT_QOS_DEPTH)
+            self.status_subscription = self.create_subscription(
+                DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, EVENT_QOS_DEPTH)
+            self.joint_state_subscription = self.create_subscription(
+                JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
+            self.trajectory_subscription = self.create_subscription(
+                JointTrajectory, TRAJECTORY, self.trajectory_callback, LATCHED_QOS)
+            if self.queue or self.random_left:
+                self.get_logger().info(f'drills: {[str(d) for d in self.queue]}, then '
+                                       f'{self.random_left} random (seed {self._seed})')
 
-    # Parameters ---------------------------------------------------------------------
+        # Parameters ---------------------------------------------------------------------
 
     def _check_lock_now(self, value) -> str | None:
         if value == '' or self.names is None or value in self.names:  # None: robot to come

@@ -8,7 +8,8 @@ installed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -109,6 +110,21 @@ def add_validators(node: Node, validators: dict[str, Validator]) -> None:
         return SetParametersResult(successful=True)
 
     node.add_on_set_parameters_callback(check)
+
+
+@contextmanager
+def destroyed_if_start_fails(node: Node) -> Iterator[None]:
+    """Destroy `node` at once when its start (the body of the block) raises; re-raise.
+
+    A node that fails to start and is left to the garbage collector is destroyed later,
+    perhaps after a new node of the same name has started in the process: its /rosout
+    publisher went with it, and the new node's log reached the console only.
+    """
+    try:
+        yield
+    except BaseException:
+        node.destroy_node()
+        raise
 
 
 def check_startup_parameters(node: Node, validators: dict[str, Validator]) -> None:

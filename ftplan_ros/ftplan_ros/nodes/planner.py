@@ -102,6 +102,7 @@ from .params import (
     check_startup_parameters,
     declare,
     declare_array,
+    destroyed_if_start_fails,
     non_negative,
     positive,
 )
@@ -153,23 +154,24 @@ class PlannerNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(PLANNER_NODE, **kwargs)
-        self.diagnostics = Diagnostics(self)
-        self._lock = threading.Lock()
-        self.cache = ManifoldCache()
-        self.scene: Scene | None = None
-        self._obstacles = ObstacleSet(None)
-        self._joint_state: np.ndarray | None = None
-        self._joint_state_problem = 'no joint state received yet on /joint_states'
-        self._early_joint_state: JointState | None = None  # arrived before the robot
-        self._pending_results: tuple | None = None
-        self._pending_markers: tuple | None = None
-        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
-        self._declare_parameters()
-        if self.source.scene is not None:
-            self._check_scene_parameters(self.source.scene)  # a bad one stops the start
-            self._use_scene(self.source.scene)
-        self._create_interfaces()
-        self.get_logger().info(f'serving {PLAN_SERVICE}')
+        with destroyed_if_start_fails(self):
+            self.diagnostics = Diagnostics(self)
+            self._lock = threading.Lock()
+            self.cache = ManifoldCache()
+            self.scene: Scene | None = None
+            self._obstacles = ObstacleSet(None)
+            self._joint_state: np.ndarray | None = None
+            self._joint_state_problem = 'no joint state received yet on /joint_states'
+            self._early_joint_state: JointState | None = None  # arrived before the robot
+            self._pending_results: tuple | None = None
+            self._pending_markers: tuple | None = None
+            self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+            self._declare_parameters()
+            if self.source.scene is not None:
+                self._check_scene_parameters(self.source.scene)  # a bad one stops the start
+                self._use_scene(self.source.scene)
+            self._create_interfaces()
+            self.get_logger().info(f'serving {PLAN_SERVICE}')
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,

@@ -69,6 +69,7 @@ from .params import (
     check_startup_parameters,
     declare,
     declare_array,
+    destroyed_if_start_fails,
     non_negative,
     positive,
 )
@@ -211,36 +212,37 @@ class SimNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__(SIM_NODE, **kwargs)
-        self.diagnostics = Diagnostics(self)
-        self.source = SceneSource(self, self.diagnostics, self._scene_changed)
-        self.rate = declare(self, 'rate', 100.0,
-                            'Rate [Hz] of the simulation steps and of /joint_states.',
-                            read_only=True)
-        self.scene: Scene | None = None   # bound to task_kind (task_scene)
-        self._declare_parameters()
-        self.names: list[str] = []
-        self._obstacles = ObstacleSet(None)
-        self.q = np.zeros(0)
-        self.initial = np.zeros(0)
-        self.motion: Motion | None = None
-        self.locked: dict[int, float] = {}
-        self.resets = 0
-        self.sim_time = 0.0  # [s] advanced by 1/rate each tick
-        self._clear_counters()
-        self.joint_state_publisher = self.create_publisher(
-            JointState, JOINT_STATES, EVENT_QOS_DEPTH)
-        if self.source.scene is not None:
-            self._use_scene(task_scene(self.source.scene,
-                                       self.get_parameter('task_kind').value))
-        self.command_subscription = self.create_subscription(
-            JointTrajectory, JOINT_COMMAND, self.joint_command_callback, EVENT_QOS_DEPTH)
-        self.locked_joint_subscription = self.create_subscription(
-            JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
-        self.obstacle_subscription = self.create_subscription(
-            MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
-        self.reset_service = self.create_service(Trigger, RESET_SERVICE,
-                                                 self.reset_callback, qos_profile=SERVICE_QOS)
-        self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
+        with destroyed_if_start_fails(self):
+            self.diagnostics = Diagnostics(self)
+            self.source = SceneSource(self, self.diagnostics, self._scene_changed)
+            self.rate = declare(self, 'rate', 100.0,
+                                'Rate [Hz] of the simulation steps and of /joint_states.',
+                                read_only=True)
+            self.scene: Scene | None = None   # bound to task_kind (task_scene)
+            self._declare_parameters()
+            self.names: list[str] = []
+            self._obstacles = ObstacleSet(None)
+            self.q = np.zeros(0)
+            self.initial = np.zeros(0)
+            self.motion: Motion | None = None
+            self.locked: dict[int, float] = {}
+            self.resets = 0
+            self.sim_time = 0.0  # [s] advanced by 1/rate each tick
+            self._clear_counters()
+            self.joint_state_publisher = self.create_publisher(
+                JointState, JOINT_STATES, EVENT_QOS_DEPTH)
+            if self.source.scene is not None:
+                self._use_scene(task_scene(self.source.scene,
+                                           self.get_parameter('task_kind').value))
+            self.command_subscription = self.create_subscription(
+                JointTrajectory, JOINT_COMMAND, self.joint_command_callback, EVENT_QOS_DEPTH)
+            self.locked_joint_subscription = self.create_subscription(
+                JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
+            self.obstacle_subscription = self.create_subscription(
+                MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
+            self.reset_service = self.create_service(Trigger, RESET_SERVICE,
+                                                     self.reset_callback, qos_profile=SERVICE_QOS)
+            self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 2.0,
