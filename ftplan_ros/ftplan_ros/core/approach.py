@@ -16,11 +16,12 @@ module plans those ordinary motions; none of them is failure-tolerant (issue 10)
 - `ApproachPlanner.path_to_goal`: with a joint locked where it stands, a configuration
   reaching the goal in its failure hyperplane (Newton from random seeds) and a path there
   in the remaining joints (straight or RRT-Connect).
-- `plan_from`: `core.plan` for an arm standing at q: starts on q's arc of M_s^F first;
-  when the plan's θ_s cannot be approached, the starts on the other free arcs of M_s that
-  a joint move reaches; the plan and its approach. When none is approached, a joint grid
-  may prove that no failure-tolerant plan starts within the arm's reach at all
-  (`free_components.tolerant_start_out_of_reach`); the approach's reason then says so.
+- `plan_from`: `core.plan` for an arm standing at q: starts on q's arc of M_s^F first.
+  When the plan's θ_s cannot be approached, a joint grid may prove that no
+  failure-tolerant plan starts within the arm's reach at all
+  (`free_components.tolerant_start_out_of_reach`; the approach's reason then says so);
+  without a proof, the starts on the other free arcs of M_s that a joint move reaches.
+  The result: the plan and its approach.
 
 Every path returned is certified collision-free over the continuum, not only at its
 samples: its segments, cut to at most `certify_step` [rad], pass
@@ -440,7 +441,8 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
     # Before the other arcs' joint moves (seconds of RRT-Connect), which a proof makes
     # needless. The plan's starts are clear by its margin, the approach's paths by their
     # own: the proof takes the smaller, so that it covers both.
-    (progress or (lambda line: None))('trying to prove that no plan starts within reach')
+    if progress is not None:
+        progress('trying to prove that no plan starts within reach')
     margin = min(options.verification.margin, approach_options.margin)
     proved_on = tolerant_start_out_of_reach(scene, q, margin,
                                             proof_grids(approach_options.proof_cells))
