@@ -13,6 +13,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from loading import LoadRun
 from nav_msgs.srv import GetPlan
+from rclpy.exceptions import ParameterException
 from rclpy.parameter import Parameter
 from ros_support import FIG3A as FIG3A_FILE
 from ros_support import wait_for
@@ -246,16 +247,27 @@ def test_a_robot_without_redundancy_stops_the_planner_at_start(ros, tmp_path):
             Parameter('scene_file', value=str(two))])
 
 
+# A start our code refuses, and one rclpy's Node.__init__ refuses half way through.
+REFUSED_STARTS = {
+    'missing scene file': (lambda tmp_path: Parameter('scene_file', value=str(
+        tmp_path / 'missing.yaml')), InputError, 'cannot read missing.yaml'),
+    'use_sim_time of the wrong type': (lambda tmp_path: Parameter(
+        'use_sim_time', value='x'), ParameterException, "parameter 'use_sim_time'"),
+}
+
+
+@pytest.mark.parametrize('refusal', list(REFUSED_STARTS))
 @pytest.mark.parametrize('node_class', [PlannerNode, ExecutorNode, SimNode, InjectorNode])
 def test_a_node_that_fails_to_start_leaves_the_next_ones_log_on_rosout(ros, tmp_path,
-                                                                        node_class):
+                                                                        node_class, refusal):
     """A node refused at start was destroyed by the garbage collector, later: its name's
     /rosout publisher went with it, and the next node of that name logged to the console
     only (test_ros_planner's log checks timed out when they ran after row 11's test)."""
-    with pytest.raises(InputError, match='cannot read missing.yaml'):
-        node_class(context=ros.context, parameter_overrides=[
-            Parameter('scene_file', value=str(tmp_path / 'missing.yaml'))])
+    bad_parameter, error, message = REFUSED_STARTS[refusal]
+    with pytest.raises(error, match=message) as refused:
+        node_class(context=ros.context, parameter_overrides=[bad_parameter(tmp_path)])
     node = ros.make(node_class)
+    del refused  # its traceback held the refused node: now the collector may destroy it
     gc.collect()
     node.get_logger().info('started after a node that did not')
     wait_for(lambda: ros.probe.logged(node.get_name(), 'started after a node that did not'),

@@ -186,8 +186,8 @@ class ExecutorNode(Node):
     """Execute plans on /ftplan/execute and recover from locked joints."""
 
     def __init__(self, **kwargs):
-        super().__init__(EXECUTOR_NODE, **kwargs)
         with destroyed_if_start_fails(self):
+            super().__init__(EXECUTOR_NODE, **kwargs)
             self.diagnostics = Diagnostics(self)
             self.source = SceneSource(self, self.diagnostics, self._scene_changed)
             self._declare_parameters()

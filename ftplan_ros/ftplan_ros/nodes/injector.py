@@ -124,8 +124,8 @@ class InjectorNode(Node):
     """Publish locked-joint failure events: scheduled, random or manual."""
 
     def __init__(self, **kwargs):
-        super().__init__(INJECTOR_NODE, **kwargs)
         with destroyed_if_start_fails(self):
+            super().__init__(INJECTOR_NODE, **kwargs)
             self.diagnostics = Diagnostics(self)
             self.source = SceneSource(self, self.diagnostics, self._scene_changed)
             self.scene = self.source.scene

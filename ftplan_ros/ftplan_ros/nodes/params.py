@@ -118,13 +118,26 @@ def destroyed_if_start_fails(node: Node) -> Iterator[None]:
 
     A node that fails to start and is left to the garbage collector is destroyed later,
     perhaps after a new node of the same name has started in the process: its /rosout
-    publisher went with it, and the new node's log reached the console only.
+    publisher went with it, and the new node's log reached the console only. The block
+    may include rclpy's own Node.__init__, which can raise half way (a parameter
+    override of the wrong type).
     """
     try:
         yield
     except BaseException:
-        node.destroy_node()
+        _destroy_started_part(node)
         raise
+
+
+def _destroy_started_part(node: Node) -> None:
+    """Destroy what exists of `node`, even when Node.__init__ stopped half way."""
+    try:
+        node.destroy_node()
+    except AttributeError:  # Node.__init__ raised before creating what destroy_node ends with
+        try:
+            node.handle.destroy_when_not_in_use()  # the rcl node, which owns /rosout
+        except AttributeError:  # it raised before the rcl node existed: nothing to destroy
+            pass
 
 
 def check_startup_parameters(node: Node, validators: dict[str, Validator]) -> None:

@@ -153,8 +153,8 @@ class PlannerNode(Node):
     """Serve GetPlan with the core planner over the scene plus the obstacle topic."""
 
     def __init__(self, **kwargs):
-        super().__init__(PLANNER_NODE, **kwargs)
         with destroyed_if_start_fails(self):
+            super().__init__(PLANNER_NODE, **kwargs)
             self.diagnostics = Diagnostics(self)
             self._lock = threading.Lock()
             self.cache = ManifoldCache()

@@ -211,8 +211,8 @@ class SimNode(Node):
     """A kinematic arm: follows commands, locks joints, reports collisions and arrival."""
 
     def __init__(self, **kwargs):
-        super().__init__(SIM_NODE, **kwargs)
         with destroyed_if_start_fails(self):
+            super().__init__(SIM_NODE, **kwargs)
             self.diagnostics = Diagnostics(self)
             self.source = SceneSource(self, self.diagnostics, self._scene_changed)
             self.rate = declare(self, 'rate', 100.0,
