@@ -268,6 +268,9 @@ def _bench_command(args: argparse.Namespace) -> int:
     _at_least(args.seed, 0, '--seed')
     if args.grid_baseline:
         _at_least(args.grid_baseline, 16, '--grid-baseline', 256)
+        if args.robot != 'planar3r':
+            raise InputError('--grid-baseline', f'times the planar3r grid planner; '
+                             f'--robot {args.robot} has none')
     if args.robot != 'planar3r':
         from .spatial_bench import run_spatial_benchmark
         return run_spatial_benchmark(args.robot, args.scenes, args.seed, args.json, Progress())

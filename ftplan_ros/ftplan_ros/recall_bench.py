@@ -174,14 +174,17 @@ def summarize(runs: list[RecallRun], cells: int, grid_baseline: int = 0) -> str:
                  f'{sum(r.refuted for r in runs)} (must be 0)')
     if grid_baseline:
         says = {verdict: f'{sum(r.grid_baseline_feasible for r in runs if r.existence == verdict)}'
-                f' of {sum(r.existence == verdict for r in runs)}' for verdict in ('yes', 'no')}
+                f' of {sum(r.existence == verdict for r in runs)}'
+                for verdict in ('yes', 'no', 'unsure')}
         lines.append(f'{baseline} baseline (cell centres, no proof): a plan exists on '
-                     f'{says["yes"]} YES scenes and on {says["no"]} NO scenes')
+                     f'{says["yes"]} YES scenes, on {says["no"]} NO scenes and on '
+                     f'{says["unsure"]} UNSURE scenes')
     return '\n'.join(lines)
 
 
 def _ratio(value: float) -> str:
-    return f'{value:.{0 if value >= 10 else 1}f}x'
+    """Format a ratio of times: whole from 10, one decimal from 1, else two significant digits."""
+    return f'{value:.0f}x' if value >= 10 else f'{value:.1f}x' if value >= 1 else f'{value:.2g}x'
 
 
 def _groups(runs: list[RecallRun]) -> list[tuple[str, list[RecallRun]]]:

@@ -234,6 +234,8 @@ def test_a_narrow_gap_is_proved_on_the_finest_grid_the_options_allow():
     assert proof_grids(256) == (64, 128, 256)
     with pytest.raises(ValueError, match='one of'):
         proof_grids(100)
+    with pytest.raises(ValueError, match='one of'):
+        ApproachOptions(proof_cells=100)  # when the options are made, not when a proof runs
 
 
 @pytest.mark.parametrize('name, route, preferred', [

@@ -55,6 +55,7 @@ def test_numbers_beyond_the_rounding_allowance_are_refused():
     (['bench', '--scenes', '0'], '--scenes'),
     (['bench', '--cells', '0'], '--cells'),
     (['bench', '--grid-baseline', '8'], '--grid-baseline'),
+    (['bench', '--robot', 'panda', '--grid-baseline', '180'], '--grid-baseline'),
 ])
 def test_bad_flags_are_refused_before_any_work(tmp_path, args, field):
     out = tmp_path / 'plan.json'

@@ -16,13 +16,20 @@ def _run(index, existence, cold_s, grid_s=None, grid_feasible=None):
 
 def test_the_grid_baseline_adds_its_p50_its_ratio_and_its_answers():
     runs = [_run(0, 'yes', 0.010, 1.4, True), _run(1, 'yes', 0.020, 1.6, False),
-            _run(2, 'no', 0.030, 1.5, True)]
+            _run(2, 'no', 0.030, 1.5, True), _run(3, 'unsure', 0.015, 1.3, False)]
     text = summarize(runs, 64, grid_baseline=180)
     line = next(row for row in text.splitlines() if row.startswith('all: all'))
-    # cold p50 20 ms, reference p50 200 ms, grid p50 1500 ms
-    assert line.split()[-4:] == ['200', '10x', '1500', '75x']
+    # cold p50 17.5 ms, reference p50 200 ms, grid p50 1450 ms
+    assert line.split()[-4:] == ['200', '11x', '1450', '83x']
     assert 'grid 180^3 p50' in text
-    assert ('a plan exists on 1 of 2 YES scenes and on 1 of 1 NO scenes') in text
+    assert ('a plan exists on 1 of 2 YES scenes, on 1 of 1 NO scenes and on 0 of 1 UNSURE '
+            'scenes') in text
+
+
+def test_a_planner_slower_than_the_reference_gets_a_ratio_below_one_not_zero():
+    text = summarize([_run(0, 'yes', 8.0), _run(1, 'no', 12.0)], 64)  # reference: 0.2 s
+    assert next(row for row in text.splitlines()
+                if row.startswith('all: all')).split()[-1] == '0.02x'
 
 
 def test_without_the_grid_baseline_the_table_has_no_such_column():

@@ -101,6 +101,9 @@ class ApproachOptions:
     proof_cells: int = START_GRIDS[-1]  # `plan_from`: finest grid of the out-of-reach proof
     manifold: ManifoldOptions = field(default_factory=ManifoldOptions)
 
+    def __post_init__(self):
+        proof_grids(self.proof_cells)  # a size that is not a proof grid is refused here
+
 
 @dataclass(frozen=True, eq=False)
 class Approach:
