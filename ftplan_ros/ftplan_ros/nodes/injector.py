@@ -174,7 +174,7 @@ class InjectorNode(Node):
                 self.get_logger().info(f'drills: {[str(d) for d in self.queue]}, then '
                                        f'{self.random_left} random (seed {self._seed})')
 
-        # Parameters ---------------------------------------------------------------------
+    # Parameters ---------------------------------------------------------------------
 
     def _check_lock_now(self, value) -> str | None:
         if value == '' or self.names is None or value in self.names:  # None: robot to come
