@@ -43,7 +43,7 @@ from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode
 from .nodes.reporting import parse_number, parse_vector
 from .nodes.sim import SimNode
-from .nodes.spinning import BackgroundSpin
+from .nodes.spinning import BackgroundSpin, RclError
 from .nodes.topics import (
     EXECUTOR_NODE,
     INJECTOR_NODE,
@@ -321,8 +321,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     progress = Progress()
     runs_wanted = len(args.drill) + args.trials or 1
-    rclpy.init(args=['--ros-args'] + (args.ros_args or []),
-               signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=['--ros-args'] + (args.ros_args or []),
+                   signal_handler_options=SignalHandlerOptions.NO)
+    except RclError as error:
+        print(f'ftplan-bringup: error: --ros-args: {error}', file=sys.stderr)
+        return 2
     # Ctrl-C and SIGTERM only set `interrupted`: the client raises KeyboardInterrupt from
     # its next wait. Raised by the signal itself, it could land inside rclpy's executor,
     # where it was lost (runs went on) or left it broken.

@@ -4,6 +4,7 @@ import os
 import time
 
 import numpy as np
+import pytest
 from ament_index_python.packages import (
     get_package_prefix,
     get_package_share_directory,
@@ -114,12 +115,17 @@ def test_four_installed_nodes_drill_across_processes(ros_context, processes):
         assert code == 0, (name, err)
 
 
-def test_a_bad_scene_file_stops_the_node_with_exit_code_2(processes):
-    planner = processes([installed('planner'), '--ros-args', '-p',
-                         'scene_file:=/nonexistent/scene.yaml'])
+@pytest.mark.parametrize('ros_args, named', [
+    (['-p', 'scene_file:=/nonexistent/scene.yaml'], '/nonexistent/scene.yaml'),
+    (['-r', '__node:=bad-name'], '__node:=bad-name'),  # rcl cannot parse it: rclpy.init fails
+    (['-p', 'scene_file:='], 'scene_file:='),
+], ids=['missing scene file', 'invalid node name', 'empty parameter value'])
+def test_a_bad_start_stops_the_node_with_one_line_and_exit_code_2(processes, ros_args, named):
+    planner = processes([installed('planner'), '--ros-args', *ros_args])
     code, _, err = planner.wait(timeout=60.0)
     assert code == 2
-    assert 'cannot start' in err and '/nonexistent/scene.yaml' in err
+    assert 'cannot start' in err and named in err
+    assert 'Traceback' not in err
 
 
 def test_the_installed_planner_takes_a_panda_from_robot_description(ros, processes, tmp_path):

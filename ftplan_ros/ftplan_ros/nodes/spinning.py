@@ -30,6 +30,7 @@ from rclpy.context import Context
 from rclpy.event_handler import EventHandler
 from rclpy.executors import ExternalShutdownException
 from rclpy.executors import MultiThreadedExecutor as _RclpyMultiThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
@@ -38,6 +39,8 @@ from .params import STARTUP_ERRORS
 MIN_THREADS = 4
 _log = rclpy.logging.get_logger('ftplan_spin')
 _STOP_POLL = 0.1  # [s] longest wait of a spin loop before it looks for a stop
+# What rclpy.init raises for `--ros-args` rcl cannot parse; rclpy gives it no public name.
+RclError = _rclpy.RCLError
 
 
 class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
@@ -130,8 +133,8 @@ class BackgroundSpin:
 def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
     """Init rclpy, build the node and spin it until Ctrl-C or SIGTERM (every node's main).
 
-    Returns 0, or 2 when the node cannot start (a bad scene file or parameter), after
-    one fatal log line.
+    Returns 0, or 2 when the node cannot start (unparsable `--ros-args`, a bad scene file
+    or parameter), after one fatal log line.
 
     The signals only set a flag, which `MultiThreadedExecutor.spin_until` reads at least
     every `_STOP_POLL` [s]. rclpy's own handlers are not installed: its signal thread triggers every
@@ -139,7 +142,11 @@ def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = 
     shuts the executor down and destroys its guard condition; the planner died in
     rcl_trigger_guard_condition (SIGSEGV) about once in 30 stops under load.
     """
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RclError as error:
+        rclpy.logging.get_logger(name).fatal(f'cannot start: {error}')
+        return 2
     stop = threading.Event()
     for number in (signal.SIGINT, signal.SIGTERM):
         signal.signal(number, lambda signum, frame: stop.set())
