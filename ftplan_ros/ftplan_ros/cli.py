@@ -137,13 +137,13 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument('--scenes', type=int, default=30,
                        help='random scenes per group (30; a 7-joint arm: tasks, 30)')
     bench.add_argument('--seed', type=int, default=0)
-    bench.add_argument('--cells', type=int, default=256,
+    bench.add_argument('--cells', type=int,
                        help='planar3r: cells per joint of the reference grid that decides '
                        'whether a plan exists (256: 1.4 deg; 16 to 256)')
-    bench.add_argument('--crowded-cells', type=int, default=128,
+    bench.add_argument('--crowded-cells', type=int,
                        help='planar3r: cells per joint of the grid that keeps a plan in the '
                        'crowded scenes as they are built (128)')
-    bench.add_argument('--grid-baseline', type=int, default=0, metavar='N',
+    bench.add_argument('--grid-baseline', type=int, metavar='N',
                        help='planar3r: also time the exhaustive grid planner on N^3 cell '
                        'centres (180: 2 deg; 16 to 256; 0, the default: not run)')
     bench.add_argument('--json', type=Path, help='write every measurement here')
@@ -260,23 +260,29 @@ def _figure_command(args: argparse.Namespace) -> int:
     return 0
 
 
+_PLANAR_BENCH_FLAGS = {'cells': 256, 'crowded_cells': 128, 'grid_baseline': 0}  # defaults
+
+
 def _bench_command(args: argparse.Namespace) -> int:
     _at_least(args.scenes, 1, '--scenes', 100_000)
-    for flag in ('cells', 'crowded_cells'):  # 256^3 cells: about 2 GB at the grid's peak
-        value = getattr(args, flag)
-        _at_least(value, 16, f'--{flag.replace("_", "-")}', 256)
     _at_least(args.seed, 0, '--seed')
-    if args.grid_baseline:
-        _at_least(args.grid_baseline, 16, '--grid-baseline', 256)
-        if args.robot != 'planar3r':
-            raise InputError('--grid-baseline', f'times the planar3r grid planner; '
-                             f'--robot {args.robot} has none')
     if args.robot != 'planar3r':
+        for flag in _PLANAR_BENCH_FLAGS:
+            if getattr(args, flag) is not None:
+                raise InputError(f'--{flag.replace("_", "-")}', f'sets the planar3r '
+                                 f'benchmark; --robot {args.robot} has no grid')
         from .spatial_bench import run_spatial_benchmark
         return run_spatial_benchmark(args.robot, args.scenes, args.seed, args.json, Progress())
+    cells, crowded_cells, grid_baseline = (
+        _PLANAR_BENCH_FLAGS[flag] if getattr(args, flag) is None else getattr(args, flag)
+        for flag in _PLANAR_BENCH_FLAGS)
+    _at_least(cells, 16, '--cells', 256)  # 256^3 cells: about 2 GB at the grid's peak
+    _at_least(crowded_cells, 16, '--crowded-cells', 256)
+    if grid_baseline:
+        _at_least(grid_baseline, 16, '--grid-baseline', 256)
     from .recall_bench import run_recall_benchmark
-    return run_recall_benchmark(args.scenes, args.seed, args.cells, args.crowded_cells,
-                                args.json, Progress(), args.grid_baseline)
+    return run_recall_benchmark(args.scenes, args.seed, cells, crowded_cells, args.json,
+                                Progress(), grid_baseline)
 
 
 def _study_command(args: argparse.Namespace) -> int:

@@ -56,6 +56,8 @@ def test_numbers_beyond_the_rounding_allowance_are_refused():
     (['bench', '--cells', '0'], '--cells'),
     (['bench', '--grid-baseline', '8'], '--grid-baseline'),
     (['bench', '--robot', 'panda', '--grid-baseline', '180'], '--grid-baseline'),
+    (['bench', '--robot', 'iiwa14', '--cells', '64'], '--cells: sets the planar3r benchmark'),
+    (['bench', '--robot', 'panda', '--crowded-cells', '64'], '--crowded-cells'),
 ])
 def test_bad_flags_are_refused_before_any_work(tmp_path, args, field):
     out = tmp_path / 'plan.json'
