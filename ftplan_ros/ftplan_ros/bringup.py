@@ -325,7 +325,7 @@ def main(argv: list[str] | None = None) -> int:
         rclpy.init(args=['--ros-args'] + (args.ros_args or []),
                    signal_handler_options=SignalHandlerOptions.NO)
     except RclError as error:
-        print(f'ftplan-bringup: error: --ros-args: {error}', file=sys.stderr)
+        print(f'ftplan-bringup: error: cannot start ROS: {error}', file=sys.stderr)
         return 2
     # Ctrl-C and SIGTERM only set `interrupted`: the client raises KeyboardInterrupt from
     # its next wait. Raised by the signal itself, it could land inside rclpy's executor,

@@ -28,7 +28,8 @@ def test_bad_input_exits_2_with_one_line(processes):
     for args, problem in [(['--drill', 'joint7@0.4'], "unknown joint 'joint7'"),
                           (['--drill', 'joint1@4'], 'must be in [0, 1]'),
                           (['--trials', '-3'], '--trials'),
-                          (['--ros-args', '-r', '__node:=bad-name'], '--ros-args: ')]:
+                          (['--ros-args', '-r', '__node:=bad-name'],
+                           "cannot start ROS: failed to initialize rcl: Couldn't parse remap")]:
         code, out, err = processes(BRINGUP + ['--scene', FIG3A, *args]).wait(timeout=120)
         assert code == 2, (args, out, err)
         assert problem in err and 'Traceback' not in err

@@ -39,7 +39,8 @@ from .params import STARTUP_ERRORS
 MIN_THREADS = 4
 _log = rclpy.logging.get_logger('ftplan_spin')
 _STOP_POLL = 0.1  # [s] longest wait of a spin loop before it looks for a stop
-# What rclpy.init raises for `--ros-args` rcl cannot parse; rclpy gives it no public name.
+# What rclpy.init raises when rcl cannot start: `--ros-args` it cannot parse, a
+# ROS_DOMAIN_ID that is not a number. rclpy gives it no public name.
 RclError = _rclpy.RCLError
 
 
@@ -133,8 +134,8 @@ class BackgroundSpin:
 def run_node(make_node: Callable[[], Node], name: str, args: list[str] | None = None) -> int:
     """Init rclpy, build the node and spin it until Ctrl-C or SIGTERM (every node's main).
 
-    Returns 0, or 2 when the node cannot start (unparsable `--ros-args`, a bad scene file
-    or parameter), after one fatal log line.
+    Returns 0, or 2 when the node cannot start (rcl refuses `--ros-args` or the
+    environment, a bad scene file or parameter), after one fatal log line.
 
     The signals only set a flag, which `MultiThreadedExecutor.spin_until` reads at least
     every `_STOP_POLL` [s]. rclpy's own handlers are not installed: its signal thread triggers every
