@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/plan_vs_grid.py [--scenes 30] [--seed 0] [--cells 256] [--json F]
 
-The same as `ftplan bench`; see ftplan_ros/recall_bench.py for what is measured.
+The same as `ftplan bench`; see ftplan_ros/bench/recall.py for what is measured.
 """
 
 import sys

@@ -38,9 +38,9 @@ STAGES = (
     ('G: certified escapes', 'tolerant_set.py', 'certified_escape'),
     ('G: liberal escapes', 'tolerant_set.py', '_liberal_components'),
     ('  labelling (both sides)', 'components.py', 'components'),
-    ('sheets: build the web', 'web_search.py', '_plan_on'),
+    ('sheets: build the web', 'recovery_sheets.py', '_plan_on'),
     ('verify S_F (either method)', 'verification.py', 'verify_surface'),
-    ('prove no plan exists', 'reference.py', 'proves_no'),
+    ('prove no plan exists', 'existence.py', 'proves_no'),
 )
 
 

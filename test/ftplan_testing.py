@@ -12,7 +12,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from ftplan_ros.core.scene import Scene, parse_scene
+from ftplan_ros.core.io.scene_file import parse_scene
+from ftplan_ros.core.model.scene import Scene
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / 'config' / 'scenes'
@@ -29,7 +30,7 @@ def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:
 
 def jacobian(robot, theta):
     """The task Jacobian (m, n) of a robot at θ (n,) [rad], as the planner computes it."""
-    from ftplan_ros.core.robot import task_residuals
+    from ftplan_ros.core.model.robot import task_residuals
     theta = np.asarray(theta, dtype=float)
     return task_residuals(robot, robot.forward_kinematics(theta), theta)[1][0]
 
@@ -157,7 +158,7 @@ def write_bot(directory: Path) -> Path:
 
 def bot(urdf: Path, task_kind: str = 'position'):
     """The test robot of the URDF file `urdf` (`write_bot`), base to `tcp`."""
-    from ftplan_ros.core.scene import robot_from_urdf
+    from ftplan_ros.core.io.scene_file import robot_from_urdf
     return robot_from_urdf(urdf.read_text(), 'tcp', tip_offset=BOT_TIP_OFFSET,
                            mesh_dirs=[str(urdf.parent)], task_kind=task_kind)
 

@@ -19,10 +19,12 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ftplan_ros.core.angles import wrap_angle
-from ftplan_ros.core.manifolds import ManifoldCache
-from ftplan_ros.core.planner import plan
-from ftplan_ros.core.scene import Obstacle, Scene, parse_scene, scene_to_dict
+from ftplan_ros.core.io.fingerprint import scene_to_dict
+from ftplan_ros.core.io.scene_file import parse_scene
+from ftplan_ros.core.model.angles import wrap_angle
+from ftplan_ros.core.model.scene import Obstacle, Scene
+from ftplan_ros.core.paper.manifolds import ManifoldCache
+from ftplan_ros.core.planning.planner import plan
 
 SCENES = Path(__file__).resolve().parents[1] / 'config' / 'scenes'
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ftplan_ros.core.scene import parse_scene
-from ftplan_ros.core.self_collision import sample_disabled_pairs
+from ftplan_ros.core.collision.self_collision import sample_disabled_pairs
+from ftplan_ros.core.io.scene_file import parse_scene
 
 _MARK = 'disabled_collisions:'
 

@@ -37,7 +37,7 @@ from sensor_msgs.msg import JointState
 from ftplan_msgs_py import read_joint_state
 
 from .core import InputError, Scene, check_plannable, load_scene
-from .core.task_space import format_point
+from .core.model.task_space import format_point
 from .nodes.executor import ExecutorNode
 from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode

@@ -31,8 +31,8 @@ from .core import (
     load_scene,
     plan,
 )
-from .core.drill import drill_json, drilled_motion, run_drill, summarize_drill
-from .core.task_space import format_point
+from .core.model.task_space import format_point
+from .core.planning.drill import drill_json, drilled_motion, run_drill, summarize_drill
 
 log = logging.getLogger('ftplan')
 
@@ -271,7 +271,7 @@ def _bench_command(args: argparse.Namespace) -> int:
             if getattr(args, flag) is not None:
                 raise InputError(f'--{flag.replace("_", "-")}', f'sets the planar3r '
                                  f'benchmark; --robot {args.robot} has no grid')
-        from .spatial_bench import run_spatial_benchmark
+        from .bench.spatial import run_spatial_benchmark
         return run_spatial_benchmark(args.robot, args.scenes, args.seed, args.json, Progress())
     cells, crowded_cells, grid_baseline = (
         _PLANAR_BENCH_FLAGS[flag] if getattr(args, flag) is None else getattr(args, flag)
@@ -280,7 +280,7 @@ def _bench_command(args: argparse.Namespace) -> int:
     _at_least(crowded_cells, 16, '--crowded-cells', 256)
     if grid_baseline:
         _at_least(grid_baseline, 16, '--grid-baseline', 256)
-    from .recall_bench import run_recall_benchmark
+    from .bench.recall import run_recall_benchmark
     return run_recall_benchmark(args.scenes, args.seed, cells, crowded_cells, args.json,
                                 Progress(), grid_baseline)
 

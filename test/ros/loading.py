@@ -34,7 +34,7 @@ from ftplan_msgs_py import (
     read_joint_trajectory,
 )
 from ftplan_ros.core import CollisionChecker, Scene
-from ftplan_ros.core.certification import certify_simplices
+from ftplan_ros.core.collision.certification import certify_simplices
 from ftplan_ros.nodes.obstacles import obstacle_from_shape, obstacle_set_key
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.reporting import stamp_key

@@ -10,7 +10,7 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import create_joint_state, create_locked_joint, read_joint_trajectory
-from ftplan_ros.core.paths import point_at_fraction
+from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.reporting import parse_vector

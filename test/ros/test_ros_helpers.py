@@ -11,8 +11,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import create_obstacle_markers
 from ftplan_ros.core import CollisionChecker, InputError, Obstacle, Task, load_scene, task_errors
-from ftplan_ros.core.angles import wrap_angle
-from ftplan_ros.core.approach import straight_move_ends
+from ftplan_ros.core.model.angles import wrap_angle
+from ftplan_ros.core.planning.approach import straight_move_ends
 from ftplan_ros.nodes.motion import progress_along, time_path
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,

@@ -34,7 +34,7 @@ from ftplan_msgs_py import (
     read_joint_trajectory,
 )
 from ftplan_ros.core import CollisionChecker, InputError, load_scene
-from ftplan_ros.core.paths import point_at_fraction
+from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.injector import InjectorNode
 from ftplan_ros.nodes.planner import PlannerNode

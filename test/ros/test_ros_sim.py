@@ -174,7 +174,7 @@ def test_a_collision_at_the_turn_of_a_command_is_reported_between_ticks(ros, roo
 
 def _configuration_at(scene, x):
     """A configuration (n,) with the end effector at x, by the core's Newton projection."""
-    from ftplan_ros.core.manifolds import project_to_preimage
+    from ftplan_ros.core.paper.manifolds import project_to_preimage
     theta = project_to_preimage(scene.robot, x, np.array([0.3, 1.0, 1.0]))
     assert theta is not None
     return theta

@@ -7,24 +7,24 @@ import pytest
 from ftplan_testing import REPO, SCENES, paper_scene
 
 from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, task_errors
-from ftplan_ros.core import approach as approach_module
-from ftplan_ros.core.approach import (
+from ftplan_ros.core.grid.free_components import (
+    FreeComponents,
+    proof_grids,
+    tolerant_start_out_of_reach,
+)
+from ftplan_ros.core.grid.tolerant_set import preimage_samples
+from ftplan_ros.core.model.paths import densify
+from ftplan_ros.core.model.scene import Obstacle
+from ftplan_ros.core.paper.manifolds import project_to_preimage, trace_self_motion_manifolds
+from ftplan_ros.core.paper.verification import VerificationOptions
+from ftplan_ros.core.planning import approach as approach_module
+from ftplan_ros.core.planning.approach import (
     ApproachOptions,
     ApproachPlanner,
     Route,
     plan_from,
     straight_move_ends,
 )
-from ftplan_ros.core.free_components import (
-    FreeComponents,
-    proof_grids,
-    tolerant_start_out_of_reach,
-)
-from ftplan_ros.core.manifolds import project_to_preimage, trace_self_motion_manifolds
-from ftplan_ros.core.paths import densify
-from ftplan_ros.core.scene import Obstacle
-from ftplan_ros.core.tolerant_set import preimage_samples
-from ftplan_ros.core.verification import VerificationOptions
 
 X_S = np.array([2.0, 0.0])
 # A disk that cuts M_s in two arcs, each holding failure-tolerant starts; the planner's

@@ -6,7 +6,7 @@ import numpy as np
 from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker
-from ftplan_ros.core.brute_force import JointGrid, grid_plan, label_periodic
+from ftplan_ros.core.grid.exhaustive import JointGrid, grid_plan, label_periodic
 
 
 def naive_components(mask, periodic):

@@ -4,16 +4,16 @@ import numpy as np
 import pytest
 
 from ftplan_ros.core import CollisionChecker
-from ftplan_ros.core.certification import (
+from ftplan_ros.core.collision.certification import (
     LARGEST_ANGLE,
     _distinct_triangles,
     certify_polylines,
     certify_simplices,
     certify_web,
 )
-from ftplan_ros.core.failure_surface import FailureSurface
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle
+from ftplan_ros.core.model.robot import PlanarChain
+from ftplan_ros.core.model.scene import Obstacle
+from ftplan_ros.core.paper.failure_surface import FailureSurface
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=0.05)
 

@@ -1,6 +1,6 @@
 """Clearances against independent references: closed forms and dense surface sampling.
 
-The checker's distances come in tiers (collision.py); whatever the tier, a value must
+The checker's distances come in tiers (checker.py); whatever the tier, a value must
 never exceed the true distance, and it must equal it where it claims to be exact.
 References here are written independently of the core: signed distances of the
 obstacles in closed form, shapes' surfaces sampled densely.
@@ -12,12 +12,9 @@ from ftplan_testing import CUBE, TETRAHEDRON, bot, robot_config
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from ftplan_ros.core import collision
-from ftplan_ros.core.chain import ChainModel
-from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.curves import FrozenJoints
-from ftplan_ros.core.dh import DHRow, chain_from_dh
-from ftplan_ros.core.distance_kernels import (
+from ftplan_ros.core.collision import checker as checker_module
+from ftplan_ros.core.collision.checker import CollisionChecker
+from ftplan_ros.core.collision.distance_kernels import (
     BOX,
     CAPSULE,
     CODES,
@@ -31,7 +28,10 @@ from ftplan_ros.core.distance_kernels import (
     segment_signed_distance,
 )
 from ftplan_ros.core.errors import InputError
-from ftplan_ros.core.geometry import (
+from ftplan_ros.core.io.scene_file import with_disabled_collisions
+from ftplan_ros.core.model.chain import ChainModel
+from ftplan_ros.core.model.dh import DHRow, chain_from_dh
+from ftplan_ros.core.model.geometry import (
     Shape,
     rotation_from_rpy,
     separation,
@@ -39,10 +39,11 @@ from ftplan_ros.core.geometry import (
     support,
     transform,
 )
-from ftplan_ros.core.planner import check_plannable
-from ftplan_ros.core.robot import LinkShape, PlanarChain
-from ftplan_ros.core.scene import Obstacle, Scene, Task, with_disabled_collisions
-from ftplan_ros.core.spatial import SpatialArm
+from ftplan_ros.core.model.robot import LinkShape, PlanarChain
+from ftplan_ros.core.model.scene import Obstacle, Scene, Task
+from ftplan_ros.core.model.spatial import SpatialArm
+from ftplan_ros.core.planning.curves import FrozenJoints
+from ftplan_ros.core.planning.planner import check_plannable
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
 SPACING = 0.002  # [m] between surface samples: sampled distances exceed the truth by less
@@ -536,7 +537,7 @@ def test_without_refinement_every_value_is_a_lower_bound(panda_scene):
 def uncapped(robot, obstacles, thetas, monkeypatch):
     """Clearances with culling switched off: the reference for culled obstacles."""
     with monkeypatch.context() as patch:
-        patch.setattr(collision, 'CULL_DISTANCE', np.inf)
+        patch.setattr(checker_module, 'CULL_DISTANCE', np.inf)
         return CollisionChecker(robot, obstacles).clearance(thetas)
 
 
@@ -556,7 +557,7 @@ def test_culled_obstacles_leave_lower_bounds(name, monkeypatch, rng):
     moving = sum(item.link != 0 for item in robot.collision_shapes)
     capped = CollisionChecker(robot, far).clearance(thetas)[:, :moving]
     assert np.all(capped == capped[0, 0])  # culled: every channel holds the cap
-    assert capped[0, 0] > collision.CULL_DISTANCE
+    assert capped[0, 0] > checker_module.CULL_DISTANCE
     with_near = CollisionChecker(robot, far + near).clearance(thetas)[:, :moving]
     assert np.all(with_near <= uncapped(robot, far + near, thetas, monkeypatch)[:, :moving] + 1e-9)
     reference = uncapped(robot, far, thetas, monkeypatch)[:, :moving]
@@ -712,7 +713,7 @@ def test_segment_signed_distance_against_brute_force(kind, rng):
     code = CODES[kind]
     assert code in (SPHERE, BOX, CYLINDER, CAPSULE)
     shape = random_link_shape(kind, rng)
-    parameters = collision.shape_parameters(shape)
+    parameters = checker_module.shape_parameters(shape)
     t = np.linspace(0.0, 1.0, 20001)[:, None]
     for _ in range(20):
         frame = random_pose(rng, 0.2)

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from ftplan_testing import WAM4, wam4
 
-from ftplan_ros.core.dh import DHRow, chain_from_dh
 from ftplan_ros.core.errors import InputError
-from ftplan_ros.core.scene import parse_scene
-from ftplan_ros.core.spatial import SpatialArm
+from ftplan_ros.core.io.scene_file import parse_scene
+from ftplan_ros.core.model.dh import DHRow, chain_from_dh
+from ftplan_ros.core.model.spatial import SpatialArm
 
 
 def rot_z(angle):

@@ -3,8 +3,8 @@ import pytest
 from ftplan_testing import SCENES
 
 from ftplan_ros.core import load_scene, plan
-from ftplan_ros.core.drill import drilled_motion, run_drill, summarize_drill
-from ftplan_ros.core.paths import path_until
+from ftplan_ros.core.model.paths import path_until
+from ftplan_ros.core.planning.drill import drilled_motion, run_drill, summarize_drill
 
 
 @pytest.fixture(scope='module')

@@ -5,19 +5,20 @@ import pytest
 from ftplan_testing import SCENES, jacobian
 
 from ftplan_ros.core import load_scene, plan
-from ftplan_ros.core.angles import configuration_difference, wrap_angle
-from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.failure_planes import FailurePlaneHit, crossing_segments, failure_plane_hits
-from ftplan_ros.core.failure_surface import (
-    choose_hits,
-    smallest_windows,
+from ftplan_ros.core.collision.checker import CollisionChecker
+from ftplan_ros.core.model.angles import configuration_difference, wrap_angle
+from ftplan_ros.core.model.robot import PlanarChain
+from ftplan_ros.core.paper.failure_planes import (
+    FailurePlaneHit,
+    crossing_segments,
+    failure_plane_hits,
 )
-from ftplan_ros.core.manifolds import (
+from ftplan_ros.core.paper.failure_surface import choose_hits, smallest_windows
+from ftplan_ros.core.paper.manifolds import (
     mark_obstacle_free,
     project_to_preimage,
     trace_self_motion_manifolds,
 )
-from ftplan_ros.core.robot import PlanarChain
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('joint1', 'joint2', 'joint3'))
 X_GOAL = np.array([1.0, 0.0])
@@ -193,8 +194,8 @@ def test_table_one_start_is_in_our_theta_S(name):
 
 
 def test_a_loop_free_all_round_comes_as_two_laps(goal_branches):
-    from ftplan_ros.core.collision import CollisionChecker
-    from ftplan_ros.core.failure_planes import goal_free_arcs
+    from ftplan_ros.core.collision.checker import CollisionChecker
+    from ftplan_ros.core.paper.failure_planes import goal_free_arcs
     free = [mark_obstacle_free(b, CollisionChecker(ARM, [])) for b in goal_branches]
     for arc in goal_free_arcs(free, 0.0):
         branch = free[arc.branch]

@@ -20,9 +20,9 @@ from ftplan_ros.core import (
     plan,
     recover,
 )
-from ftplan_ros.core.angles import wrap_angle
-from ftplan_ros.core.drill import drilled_motion
-from ftplan_ros.core.paths import cumulative_fractions, path_until, point_at_fraction
+from ftplan_ros.core.model.angles import wrap_angle
+from ftplan_ros.core.model.paths import cumulative_fractions, path_until, point_at_fraction
+from ftplan_ros.core.planning.drill import drilled_motion
 from ftplan_ros.figures import spatial
 
 REPO = Path(__file__).resolve().parents[2]

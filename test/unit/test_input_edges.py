@@ -10,8 +10,8 @@ import pytest
 from ftplan_testing import SCENES
 
 from ftplan_ros.core import CollisionChecker, InputError, Obstacle, load_scene, plan, recover
-from ftplan_ros.core.scene import parse_scene
-from ftplan_ros.core.verification import VerificationOptions
+from ftplan_ros.core.io.scene_file import parse_scene
+from ftplan_ros.core.paper.verification import VerificationOptions
 
 ARM = {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]}
 TASK = {'start': [2.0, 0.0], 'goal': [1.0, 0.0]}

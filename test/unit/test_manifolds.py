@@ -4,10 +4,12 @@ import numpy as np
 import pytest
 from ftplan_testing import jacobian
 
-from ftplan_ros.core.angles import configuration_difference, wrap_steps
-from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.kernels import solve_in_place
-from ftplan_ros.core.manifolds import (
+from ftplan_ros.core.collision.checker import CollisionChecker
+from ftplan_ros.core.model.angles import configuration_difference, wrap_steps
+from ftplan_ros.core.model.kinematics import solve_in_place
+from ftplan_ros.core.model.robot import PlanarChain
+from ftplan_ros.core.model.scene import Obstacle
+from ftplan_ros.core.paper.manifolds import (
     ManifoldCache,
     ManifoldOptions,
     mark_obstacle_free,
@@ -16,8 +18,6 @@ from ftplan_ros.core.manifolds import (
     self_motion_path,
     trace_self_motion_manifolds,
 )
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
 

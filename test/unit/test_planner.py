@@ -15,10 +15,10 @@ from ftplan_ros.core import (
     recover,
     task_errors,
 )
-from ftplan_ros.core.brute_force import recoverable_in_plane
-from ftplan_ros.core.paths import densify, point_at_fraction
-from ftplan_ros.core.scene import Obstacle, Task
-from ftplan_ros.core.surface_search import SurfaceSearch, straight_fans
+from ftplan_ros.core.grid.exhaustive import recoverable_in_plane
+from ftplan_ros.core.model.paths import densify, point_at_fraction
+from ftplan_ros.core.model.scene import Obstacle, Task
+from ftplan_ros.core.planning.surface_search import SurfaceSearch, straight_fans
 
 X_GOAL = np.array([1.0, 0.0])
 

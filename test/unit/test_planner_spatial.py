@@ -14,12 +14,13 @@ import pytest
 from ftplan_testing import robot_config
 
 from ftplan_ros.core import plan, recover
-from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.drill import drill_json, run_drill
-from ftplan_ros.core.manifolds import ManifoldOptions, trace_self_motion_manifolds
-from ftplan_ros.core.paths import point_at_fraction
-from ftplan_ros.core.robot import task_errors
-from ftplan_ros.core.scene import Obstacle, Scene, Task, parse_scene
+from ftplan_ros.core.collision.checker import CollisionChecker
+from ftplan_ros.core.io.scene_file import parse_scene
+from ftplan_ros.core.model.paths import point_at_fraction
+from ftplan_ros.core.model.robot import task_errors
+from ftplan_ros.core.model.scene import Obstacle, Scene, Task
+from ftplan_ros.core.paper.manifolds import ManifoldOptions, trace_self_motion_manifolds
+from ftplan_ros.core.planning.drill import drill_json, run_drill
 
 IIWA_ELBOW = 'iiwa_joint_4'
 IIWA_POSE = Task((0.33281, 0.462817, 0.705411, 0.755692, -0.431346, 0.324635, -0.370786),

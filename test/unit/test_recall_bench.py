@@ -4,7 +4,7 @@ import json
 import subprocess
 import sys
 
-from ftplan_ros.recall_bench import RecallRun, summarize
+from ftplan_ros.bench.recall import RecallRun, summarize
 
 
 def _run(index, existence, cold_s, grid_s=None, grid_feasible=None):

@@ -14,8 +14,8 @@ from ftplan_ros.core import (
     plan,
     recover,
 )
-from ftplan_ros.core.failure_surface import FailureSurface
-from ftplan_ros.core.paths import densify
+from ftplan_ros.core.model.paths import densify
+from ftplan_ros.core.paper.failure_surface import FailureSurface
 
 
 @pytest.fixture(scope='module')

@@ -1,4 +1,4 @@
-"""The existence reference (core/reference.py): its proofs against the planner and brute force.
+"""The existence reference (core/grid/existence.py): its proofs against the planner and brute force.
 
 A YES must never meet a proof of the opposite, a NO never a verified plan; the scenes
 where the reference proves NO are checked by brute force too (every goal configuration
@@ -9,25 +9,25 @@ import numpy as np
 import pytest
 from ftplan_testing import SCENES, paper_scene
 
-from ftplan_ros.bench import random_scene
+from ftplan_ros.bench.crowded import crowded_scene
+from ftplan_ros.bench.scenes import random_scene
 from ftplan_ros.core import CollisionChecker, load_scene, parse_scene, plan
-from ftplan_ros.core.components import components
-from ftplan_ros.core.reference import (
+from ftplan_ros.core.grid.components import components
+from ftplan_ros.core.grid.existence import (
     Existence,
     ReferenceAnswer,
     decide_existence,
     proves_no,
     proves_yes,
 )
-from ftplan_ros.core.scene import Obstacle
-from ftplan_ros.core.tolerant_set import (
+from ftplan_ros.core.grid.recovery_sheets import PROVED_NONE
+from ftplan_ros.core.grid.tolerant_set import (
     TolerantSet,
     pooled_tolerant_set,
     preimage_samples,
     tolerant_set,
 )
-from ftplan_ros.core.web_search import PROVED_NONE
-from ftplan_ros.crowded import crowded_scene
+from ftplan_ros.core.model.scene import Obstacle
 
 
 def goal_configurations(x, count=2000):
@@ -112,7 +112,7 @@ def test_an_obstacle_free_paper_task_is_no_proof_of_no():
 
 
 def sampled_scenes():
-    """Seeded random scenes (bench.py) and a cheap crowded one (crowded.py).
+    """Seeded random scenes (bench/scenes.py) and a cheap crowded one (bench/crowded.py).
 
     (Random seeds 0 and 6 are proved to have no plan, 2, 4 and 7 have plans.)
     """

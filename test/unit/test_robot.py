@@ -15,14 +15,14 @@ import pytest
 from ftplan_testing import ROBOTS, WAM4, bot, robot_config, wam4
 from scipy.spatial.transform import Rotation
 
-from ftplan_ros.core import kernels
-from ftplan_ros.core.collision import CollisionChecker
-from ftplan_ros.core.curves import FrozenJoints
+from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.errors import InputError
-from ftplan_ros.core.geometry import KINDS
-from ftplan_ros.core.robot import PlanarChain, task_errors, task_residuals
-from ftplan_ros.core.spatial import SpatialArm
-from ftplan_ros.core.task_space import POINT_SIZE, TASK_DIM
+from ftplan_ros.core.model import kinematics
+from ftplan_ros.core.model.geometry import KINDS
+from ftplan_ros.core.model.robot import PlanarChain, task_errors, task_residuals
+from ftplan_ros.core.model.spatial import SpatialArm
+from ftplan_ros.core.model.task_space import POINT_SIZE, TASK_DIM
+from ftplan_ros.core.planning.curves import FrozenJoints
 
 PAPER = PlanarChain((1.0, 1.0, 1.0), ('joint1', 'joint2', 'joint3'))
 LIMITED = PlanarChain((1.0, 0.7, 0.4), ('a', 'b', 'c'), link_radius=0.05,
@@ -346,7 +346,7 @@ def test_kernel_parameters_give_the_residuals_of_task_residuals(robot, rng):
     x = np.asarray(robot.forward_kinematics(sample(robot, rng)), dtype=float)
     residuals, jacobians = task_residuals(robot, x, thetas)
     for k, theta in enumerate(thetas):
-        residual, jacobian = kernels.task_residual(robot.kernel_kind, robot.kernel_parameters,
+        residual, jacobian = kinematics.task_residual(robot.kernel_kind, robot.kernel_parameters,
                                                    x, np.ascontiguousarray(theta))
         assert np.array_equal(residual, residuals[k])
         assert np.array_equal(jacobian, jacobians[k])
@@ -436,7 +436,7 @@ def test_frozen_joints_are_the_whole_robot_with_those_joints_held(rng):
                                    np.pi - 1e-5, np.pi - 1e-9, np.pi])
 def test_rotation_log_is_scipys_rotation_vector(angle, rng):
     for axis in Rotation.random(20, random_state=rng.integers(1 << 31)).apply([0.0, 0.0, 1.0]):
-        log = kernels.rotation_log(Rotation.from_rotvec(angle * axis).as_matrix())
+        log = kinematics.rotation_log(Rotation.from_rotvec(angle * axis).as_matrix())
         assert np.linalg.norm(log) == pytest.approx(angle, abs=1e-7)
         if angle < np.pi - 1e-4:
             assert np.allclose(log, angle * axis, atol=1e-9)
@@ -450,11 +450,11 @@ def test_rotation_log_is_scipys_rotation_vector(angle, rng):
 def test_quaternions_and_axis_bases(rng):
     for quaternion in Rotation.random(20, random_state=rng.integers(1 << 31)).as_quat():
         scaled = 1.3 * quaternion  # normalised first
-        assert np.allclose(kernels.quaternion_rotation(scaled),
+        assert np.allclose(kinematics.quaternion_rotation(scaled),
                            Rotation.from_quat(quaternion).as_matrix(), atol=1e-12)
     axes = Rotation.random(20, random_state=rng.integers(1 << 31)).apply([0.0, 0.0, 1.0])
     for axis in np.vstack([axes, np.eye(3), -np.eye(3)]):
-        first, second = kernels.axis_basis(axis)
+        first, second = kinematics.axis_basis(axis)
         frame = np.column_stack([first, second, axis])
         assert np.allclose(frame.T @ frame, np.eye(3), atol=1e-12)
         assert np.linalg.det(frame) == pytest.approx(1.0)

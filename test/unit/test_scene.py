@@ -7,10 +7,12 @@ import yaml
 from ftplan_testing import ROBOTS, SCENES, WAM4, robot_config, write_bot
 
 from ftplan_ros.core.errors import InputError
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Task, load_scene, parse_scene, scene_to_dict
-from ftplan_ros.core.spatial import SpatialArm
-from ftplan_ros.core.task_space import TASK_DIM
+from ftplan_ros.core.io.fingerprint import scene_to_dict
+from ftplan_ros.core.io.scene_file import load_scene, parse_scene
+from ftplan_ros.core.model.robot import PlanarChain
+from ftplan_ros.core.model.scene import Task
+from ftplan_ros.core.model.spatial import SpatialArm
+from ftplan_ros.core.model.task_space import TASK_DIM
 
 GOOD = {
     'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0], 'link_radius': 0.0,

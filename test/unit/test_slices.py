@@ -16,9 +16,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ftplan_ros.core.failure_surface import FailureSurface
-from ftplan_ros.core.recovery import recover
-from ftplan_ros.core.slices import slice_problem
+from ftplan_ros.core.paper.failure_surface import FailureSurface
+from ftplan_ros.core.paper.recovery import recover
+from ftplan_ros.core.paper.slices import slice_problem
 
 SAME = 1e-10  # [rad] points closer than this are one point
 NEAR_VERTEX = 1e-7  # [rad] sampled levels keep this far from vertex values

@@ -15,8 +15,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ftplan_ros.core import CollisionChecker, InputError, load_scene, parse_scene, plan, recover
-from ftplan_ros.core.brute_force import recoverable_in_plane
-from ftplan_ros.core.cell_classes import (
+from ftplan_ros.core.collision.distance_kernels import planar_link_clearances
+from ftplan_ros.core.grid.cell_classes import (
     JointLattice,
     _arc_half_width,
     _mark_cells,
@@ -26,12 +26,9 @@ from ftplan_ros.core.cell_classes import (
     supports,
     triangle_free,
 )
-from ftplan_ros.core.components import components, layer_components, overlap
-from ftplan_ros.core.distance_kernels import planar_link_clearances
-from ftplan_ros.core.paths import densify, point_at_fraction
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle
-from ftplan_ros.core.tolerant_set import (
+from ftplan_ros.core.grid.components import components, layer_components, overlap
+from ftplan_ros.core.grid.exhaustive import recoverable_in_plane
+from ftplan_ros.core.grid.tolerant_set import (
     locked_goal_configurations,
     locked_goal_configurations_at,
     pooled_tolerant_set,
@@ -40,6 +37,9 @@ from ftplan_ros.core.tolerant_set import (
     tolerant_set,
     two_link_solutions,
 )
+from ftplan_ros.core.model.paths import densify, point_at_fraction
+from ftplan_ros.core.model.robot import PlanarChain
+from ftplan_ros.core.model.scene import Obstacle
 
 LINKS = np.array([1.0, 1.0, 1.0])
 

@@ -23,12 +23,12 @@ from ftplan_testing import (
     write_binary_stl,
 )
 
-from ftplan_ros.core.chain import ChainModel
-from ftplan_ros.core.collision import CollisionChecker
+from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.errors import InputError
-from ftplan_ros.core.robot import task_residuals
-from ftplan_ros.core.scene import load_scene, robot_from_urdf
-from ftplan_ros.core.urdf import chain_from_urdf
+from ftplan_ros.core.io.scene_file import load_scene, robot_from_urdf
+from ftplan_ros.core.model.chain import ChainModel
+from ftplan_ros.core.model.robot import task_residuals
+from ftplan_ros.core.model.urdf import chain_from_urdf
 
 PEDESTAL = ('<link name="world"/>\n  <joint name="mount" type="fixed"><parent link="world"/>'
             '<child link="base"/><origin xyz="0.1 0.2 0.3" rpy="0.1 0 0.5"/></joint>\n  ')

@@ -7,11 +7,15 @@ import pytest
 from ftplan_testing import paper_scene
 
 from ftplan_ros.core import CollisionChecker, plan
-from ftplan_ros.core.certification import LARGEST_ANGLE, _distinct_triangles, certify_simplices
-from ftplan_ros.core.failure_surface import FailureSurface
-from ftplan_ros.core.robot import PlanarChain
-from ftplan_ros.core.scene import Obstacle, Task
-from ftplan_ros.core.verification import (
+from ftplan_ros.core.collision.certification import (
+    LARGEST_ANGLE,
+    _distinct_triangles,
+    certify_simplices,
+)
+from ftplan_ros.core.model.robot import PlanarChain
+from ftplan_ros.core.model.scene import Obstacle, Task
+from ftplan_ros.core.paper.failure_surface import FailureSurface
+from ftplan_ros.core.paper.verification import (
     certify_surface,
     goal_row_error,
     structure_problem,
@@ -158,7 +162,7 @@ def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():
 
 def test_goal_row_bound_holds_against_dense_sampling():
     # The branches for [1, 0] are straight lines in joint space; the one for [2, 0] curves.
-    from ftplan_ros.core.manifolds import trace_self_motion_manifolds
+    from ftplan_ros.core.paper.manifolds import trace_self_motion_manifolds
     curved = 0
     for x in (X_GOAL, np.array([2.0, 0.0])):
         for branch in trace_self_motion_manifolds(ARM, x, np.random.default_rng(1)):

@@ -1,4 +1,4 @@
-"""Recovery sheets (core/web_search.py) on crowded scenes (crowded.py), refereed by brute force.
+"""Recovery sheets (core/grid/recovery_sheets.py) on crowded scenes, refereed by brute force.
 
 The guarantee is checked without the certificate: locks of every tolerated joint along
 the nominal path are recovered with `recover` (what the executor runs), and each recovery
@@ -15,22 +15,20 @@ from ftplan_testing import SCENES, slice_distance
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import shortest_path
 
+from ftplan_ros.bench.crowded import RADII, crowded_scene
 from ftplan_ros.core import CollisionChecker, PlannerOptions, load_scene, plan, recover
-from ftplan_ros.core.failure_planes import failure_hypercube
-from ftplan_ros.core.paths import densify, path_length, point_at_fraction
-from ftplan_ros.core.reference import Existence, decide_existence
-from ftplan_ros.core.tolerant_set import fits_goal_tolerance
-from ftplan_ros.core.verification import VerificationOptions, verify_surface
-from ftplan_ros.core.web_search import (
-    METHOD,
-    PAPER_METHOD,
-    PROVED_NONE,
-    _bfs,
-    _greedy_cuts,
+from ftplan_ros.core.grid.existence import Existence, decide_existence
+from ftplan_ros.core.grid.recovery_sheets import METHOD, PAPER_METHOD, PROVED_NONE
+from ftplan_ros.core.grid.sheet_kernels import (
     _piece_middles,
-    _triangle_free,
+    bfs,
+    greedy_cuts,
+    mask_triangle_free,
 )
-from ftplan_ros.crowded import RADII, crowded_scene
+from ftplan_ros.core.grid.tolerant_set import fits_goal_tolerance
+from ftplan_ros.core.model.paths import densify, path_length, point_at_fraction
+from ftplan_ros.core.paper.failure_planes import failure_hypercube
+from ftplan_ros.core.paper.verification import VerificationOptions, verify_surface
 
 HALF_DEGREE = np.radians(0.5)
 # crowded_scene(default_rng(seed), disks=6, attempts=12, cells=64) for these seeds leaves
@@ -174,7 +172,7 @@ def test_a_paper_plan_is_named_for_its_method():
     assert all(np.array_equal(a, b) for a, b in zip(result.hypercube, box, strict=True))
 
 
-# crowded.py -----------------------------------------------------------------------------
+# bench/crowded.py ---------------------------------------------------------------------
 
 def test_crowded_scenes_repeat_and_keep_their_disks_clear():
     few = {'disks': 2, 'attempts': 4, 'cells': 64}
@@ -290,7 +288,7 @@ def test_a_fine_goal_tolerance_gets_a_goal_row_fine_enough():
 
 
 def test_the_grid_search_finds_a_shortest_path_through_the_mask():
-    """`_bfs` against shortest path lengths on the explicit graph of neighbouring cells."""
+    """`bfs` against shortest path lengths on the explicit graph of neighbouring cells."""
     rng = np.random.default_rng(21)
     found = 0
     for trial in range(200):
@@ -321,7 +319,7 @@ def test_the_grid_search_finds_a_shortest_path_through_the_mask():
                                  indices=index[tuple(sources.T)][mask[tuple(sources.T)]])
         goals = index[tuple(np.argwhere(target).T)]
         nearest = distance[:, goals].min() if len(goals) and len(distance) else np.inf
-        path = _bfs(mask, periodic, sources, target)
+        path = bfs(mask, periodic, sources, target)
         if not np.isfinite(nearest):
             assert path is None, trial
             continue
@@ -372,7 +370,7 @@ def test_a_segments_pieces_come_in_order_at_every_grid_crossing():
 
 
 def test_straight_cuts_stay_in_the_mask_and_within_the_longest_cut():
-    """`_greedy_cuts` on random walks through random masks, 2-D and 3-D, periodic or not.
+    """`greedy_cuts` on random walks through random masks, 2-D and 3-D, periodic or not.
 
     A step to the next point is the caller's path and is kept as it is; every longer cut
     is sampled densely (the cells it passes are found by flooring the samples), so a cut
@@ -392,7 +390,7 @@ def test_straight_cuts_stay_in_the_mask_and_within_the_longest_cut():
         mask[tuple(cells.T)] = True  # the walk's own cells are free
         offsets = np.where(periodic, walk, cells) + 0.5 + rng.uniform(-0.3, 0.3, walk.shape)
         longest = rng.choice([3.0, 16.0, np.inf])
-        kept = _greedy_cuts(mask, periodic, offsets, longest)
+        kept = greedy_cuts(mask, periodic, offsets, longest)
         assert kept[0] == 0 and kept[-1] == len(offsets) - 1, trial
         assert np.all(np.diff(kept) > 0), trial
         for first, last in zip(kept[:-1], kept[1:], strict=True):
@@ -423,7 +421,7 @@ def triangle_meets_cell(corners, cell):
 
 
 def test_a_triangle_is_free_exactly_when_no_cell_it_meets_is_blocked():
-    """`_triangle_free` on random triangles (large, small, thin, on grid lines, leaving a
+    """`mask_triangle_free` on random triangles (large, small, thin, on grid lines, leaving a
     bounded axis) in masks with one blocked cell: a dense sample of the triangle inside
     the blocked cell makes it not free, and a triangle said not free meets the blocked
     cell or leaves a bounded axis (exact separating-axis test)."""
@@ -441,7 +439,7 @@ def test_a_triangle_is_free_exactly_when_no_cell_it_meets_is_blocked():
         cell = rng.integers(0, size, 2)
         mask = np.ones((size, size), dtype=bool)
         mask[tuple(cell)] = False
-        free = _triangle_free(mask, corners[0], corners[1], corners[2], periodic)
+        free = mask_triangle_free(mask, corners[0], corners[1], corners[2], periodic)
         # Copies of the blocked cell round the periodic axes, near the triangle.
         shifts = [np.array([i, j]) * size for i in (-2, -1, 0, 1, 2) for j in (-2, -1, 0, 1, 2)
                   if (i == 0 or periodic[0]) and (j == 0 or periodic[1])]
@@ -462,7 +460,7 @@ def test_a_triangle_is_free_exactly_when_no_cell_it_meets_is_blocked():
     assert 300 < blocked_hits < 2700
     mask = np.ones((size, size), dtype=bool)
     for bad in (np.nan, np.inf):
-        assert not _triangle_free(mask, np.array([1.0, 1.0]), np.array([2.0, bad]),
+        assert not mask_triangle_free(mask, np.array([1.0, 1.0]), np.array([2.0, bad]),
                                   np.array([3.0, 1.0]), np.ones(2, dtype=bool))
 
 

@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..core.result import PlanResult
-from ..core.robot import PlanarChain, task_errors
-from ..core.scene import Scene
+from ..core.model.robot import PlanarChain, task_errors
+from ..core.model.scene import Scene
+from ..core.paper.result import PlanResult
 from . import planar, progress, spatial
 from .joint_space_3d import _c_space_obstacle_cells, draw_joint_space
 from .planar import draw_scenery as _draw_scenery

@@ -13,10 +13,10 @@ from matplotlib.axes import Axes
 from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from ..core.collision import CollisionChecker
-from ..core.result import PlanResult
-from ..core.robot import PlanarChain
-from ..core.scene import Obstacle, Scene
+from ..core.collision.checker import CollisionChecker
+from ..core.model.robot import PlanarChain
+from ..core.model.scene import Obstacle, Scene
+from ..core.paper.result import PlanResult
 from .planar import screening_spheres
 from .style import (
     GOAL_COLOUR,

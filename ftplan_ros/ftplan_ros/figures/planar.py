@@ -12,11 +12,11 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
 from scipy.spatial import ConvexHull, QhullError
 
-from ..core.collision import rotation_from_rpy
-from ..core.paths import densify, point_at_fraction
-from ..core.result import PlanResult
-from ..core.robot import PlanarChain
-from ..core.scene import Obstacle, Scene
+from ..core.collision.checker import rotation_from_rpy
+from ..core.model.paths import densify, point_at_fraction
+from ..core.model.robot import PlanarChain
+from ..core.model.scene import Obstacle, Scene
+from ..core.paper.result import PlanResult
 from .style import (
     FAILURE_COLOUR,
     FINAL_COLOUR,

@@ -27,11 +27,11 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure, SubFigure
 from matplotlib.ticker import MaxNLocator
 
-from ..core.angles import configuration_difference, wrap_configuration
-from ..core.paths import cumulative_fractions
-from ..core.result import PlanResult
-from ..core.robot import Robot
-from ..core.scene import Scene
+from ..core.model.angles import configuration_difference, wrap_configuration
+from ..core.model.paths import cumulative_fractions
+from ..core.model.robot import Robot
+from ..core.model.scene import Scene
+from ..core.paper.result import PlanResult
 from .style import (
     GOAL_COLOUR,
     HYPERCUBE_COLOUR,

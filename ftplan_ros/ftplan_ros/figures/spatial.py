@@ -22,11 +22,11 @@ from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from scipy.spatial.transform import Rotation
 
-from ..core.geometry import rotation_from_rpy
-from ..core.paths import densify, point_at_fraction
-from ..core.result import PlanResult
-from ..core.robot import Robot
-from ..core.scene import Obstacle, Scene
+from ..core.model.geometry import rotation_from_rpy
+from ..core.model.paths import densify, point_at_fraction
+from ..core.model.robot import Robot
+from ..core.model.scene import Obstacle, Scene
+from ..core.paper.result import PlanResult
 from .style import (
     FAILURE_COLOUR,
     FINAL_COLOUR,

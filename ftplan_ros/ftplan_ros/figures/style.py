@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..core.result import PlanResult
+from ..core.paper.result import PlanResult
 
 DPI = 120
 SNAPSHOTS = 12  # arm drawings along an executed motion

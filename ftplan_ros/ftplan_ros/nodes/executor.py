@@ -80,9 +80,9 @@ from ftplan_ros.core import (
     recover,
     task_errors,
 )
-from ftplan_ros.core.angles import configuration_difference
-from ftplan_ros.core.approach import Approach, ApproachOptions, ApproachPlanner, Route
-from ftplan_ros.core.paths import cumulative_fractions, point_at_fraction
+from ftplan_ros.core.model.angles import configuration_difference
+from ftplan_ros.core.model.paths import cumulative_fractions, point_at_fraction
+from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
 
 from .inputs import read_arm_state
 from .locks import (

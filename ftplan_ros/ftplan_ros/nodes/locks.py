@@ -16,7 +16,7 @@ import numpy as np
 from sensor_msgs.msg import JointState
 
 from ftplan_msgs_py import LockedJoint, read_locked_joint
-from ftplan_ros.core.angles import configuration_difference
+from ftplan_ros.core.model.angles import configuration_difference
 
 LOCKED_TOLERANCE = 1e-9  # [rad] a command may differ this much from a locked joint's angle
 # [rad] Farthest a lock event's angle may be from where the joint is: a joint that locks

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ftplan_ros.core.angles import configuration_difference
+from ftplan_ros.core.model.angles import configuration_difference
 
 MIN_STEP_TIME = 1e-3  # [s] keeps the times of a trajectory strictly increasing
 

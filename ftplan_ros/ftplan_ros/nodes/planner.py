@@ -84,14 +84,11 @@ from ftplan_ros.core import (
     load_kernels,
     plan,
 )
-from ftplan_ros.core.approach import Approach, ApproachOptions, plan_from
-from ftplan_ros.core.free_components import PROOF_GRIDS, START_GRIDS
-from ftplan_ros.core.planner import check_plannable
-from ftplan_ros.core.scene import (
-    DEFAULT_GOAL_TOLERANCE,
-    DEFAULT_ORIENTATION_TOLERANCE,
-    parse_tolerated,
-)
+from ftplan_ros.core.grid.free_components import PROOF_GRIDS, START_GRIDS
+from ftplan_ros.core.io.scene_file import parse_tolerated
+from ftplan_ros.core.model.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
+from ftplan_ros.core.planning.approach import Approach, ApproachOptions, plan_from
+from ftplan_ros.core.planning.planner import check_plannable
 
 from .inputs import read_arm_state
 from .motion import time_path

@@ -23,7 +23,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import String
 
 from ftplan_ros.core import InputError, Scene, load_scene, robot_from_urdf
-from ftplan_ros.core.scene import MissingRobotError
+from ftplan_ros.core.io.scene_file import MissingRobotError
 
 from .params import array_parameter, declare, declare_array, default_scene_file
 from .qos import LATCHED_QOS

@@ -54,11 +54,11 @@ from ftplan_msgs_py import (
     time_to_seconds,
 )
 from ftplan_ros.core import CollisionChecker, InputError, Robot, Scene, Task, task_errors
-from ftplan_ros.core.angles import configuration_difference, wrap_configuration
-from ftplan_ros.core.manifolds import project_many, trace_self_motion_manifolds
-from ftplan_ros.core.paths import densify
-from ftplan_ros.core.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
-from ftplan_ros.core.task_space import POINT_SIZE, unit_vector
+from ftplan_ros.core.model.angles import configuration_difference, wrap_configuration
+from ftplan_ros.core.model.paths import densify
+from ftplan_ros.core.model.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
+from ftplan_ros.core.model.task_space import POINT_SIZE, unit_vector
+from ftplan_ros.core.paper.manifolds import project_many, trace_self_motion_manifolds
 
 from .inputs import angle_problem
 from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem, read_lock_event

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ftplan_ros.core import InputError, PlanarChain, Robot, SpatialArm
-from ftplan_ros.core.task_space import KINDS, POINT_SIZE
+from ftplan_ros.core.model.task_space import KINDS, POINT_SIZE
 
 SPATIAL_KINDS = ('position', 'axis', 'pose')
 _KIND_OF_SIZE = {size: kind for kind, size in POINT_SIZE.items()}

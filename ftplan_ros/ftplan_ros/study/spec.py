@@ -45,9 +45,9 @@ from ..core import (
     VerificationOptions,
     load_scene,
 )
-from ..core.files import load_yaml, read_text
-from ..core.options import METHODS
-from ..core.scene import scene_fingerprint
+from ..core.io.files import load_yaml, read_text
+from ..core.io.fingerprint import scene_fingerprint
+from ..core.paper.options import METHODS
 from ..core.validation import check_keys, integer, mapping, number
 
 AXES = ('x', 'y', 'z')

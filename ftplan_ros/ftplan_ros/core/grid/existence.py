@@ -1,0 +1,101 @@
+"""Existence: decide from both sides whether a failure-tolerant plan exists at all.
+
+A plan exists exactly when a path inside the failure-tolerant set G joins a start
+configuration (on M_s, obstacle-free) to a goal configuration (tolerant_set.py). On a
+joint grid of N^3 cells:
+
+* YES (proved): the cells certified inside G for every tolerated joint hold a component
+  (cells touching at a face, edge or corner; closed cells that touch share a point) with
+  an exact point of M_s (closed-form inverse kinematics) in one cell and an exact goal
+  configuration in another. Every configuration of those cells is in G, so the path
+  through them is a plan.
+* NO (proved): in the cells that may meet G, no component holds both a cell that may
+  contain a start configuration and one that may contain a goal configuration. Any plan
+  would be a connected set of G meeting both, covered by such cells.
+* UNSURE otherwise: the grid is too coarse to decide.
+
+Planar 3R arms among disks only (exact distances make both sides rigorous); the answer
+also says how many cells each side kept, and the time it took.
+"""
+
+from __future__ import annotations
+
+import enum
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.scene import Scene
+from .cell_classes import supports
+from .components import Components, components
+from .tolerant_set import TolerantSet, preimage_samples, tolerant_set
+
+
+class Existence(enum.Enum):
+    """Whether a failure-tolerant plan exists, as far as the grid can tell."""
+
+    YES = 'yes'
+    NO = 'no'
+    UNSURE = 'unsure'
+
+
+@dataclass(frozen=True)
+class ReferenceAnswer:
+    """The reference's verdict on one scene, with its grid and the time it took [s]."""
+
+    existence: Existence
+    cells: int
+    certified_cells: int     # cells certified inside G
+    liberal_cells: int       # cells that may meet G
+    time_s: float
+
+
+def decide_existence(scene: Scene, cells: int = 256) -> ReferenceAnswer:
+    """Decide on N = `cells` cells per joint whether the scene's task has a plan."""
+    if not supports(scene):
+        raise ValueError('the reference handles planar 3R arms among disks only')
+    started = time.perf_counter()
+    grid = tolerant_set(scene, cells)
+    existence = Existence.YES if proves_yes(grid) else \
+        Existence.NO if proves_no(grid) else Existence.UNSURE
+    return ReferenceAnswer(existence, cells, int(grid.certified_all.sum()),
+                           int(grid.liberal_all.sum()), time.perf_counter() - started)
+
+
+def proves_yes(grid: TolerantSet) -> bool:
+    """Whether certified cells join an exact start configuration to an exact goal one."""
+    inside = grid.certified_all
+    if not inside.any():
+        return False
+    lattice = grid.lattice
+    robot, task = grid.scene.robot, grid.scene.task
+    lengths = np.asarray(robot.link_lengths, dtype=float)
+    found = components(inside, lattice.periodic)
+    starts = preimage_samples(lengths, np.asarray(task.start, dtype=float), 8 * lattice.cells)
+    goals = np.vstack([grid.escape(j).goal_points for j in grid.joints] + [
+        preimage_samples(lengths, np.asarray(task.goal, dtype=float), 8 * lattice.cells)])
+    return bool(np.intersect1d(_components_at(found, lattice, starts),
+                               _components_at(found, lattice, goals)).size)
+
+
+def proves_no(grid: TolerantSet) -> bool:
+    """Whether no component of the cells that may meet G may hold both a start and a goal.
+
+    The joints are taken in turn: once those so far leave no cell that may hold a start
+    (or a goal), none is left when every joint counts, and the rest need not be computed.
+    """
+    start, goal = grid.near_start, grid.near_goal
+    outside = grid.liberal_holding((start, goal))
+    if outside is None:
+        return True
+    found = components(outside, grid.lattice.periodic)
+    shared = found.holding(start) & found.holding(goal)
+    return not shared[1:].any()
+
+
+def _components_at(found: Components, lattice, points: np.ndarray) -> np.ndarray:
+    """Components (> 0) of the cells holding configurations (c, 3) [rad] within the limits."""
+    points = points[lattice.inside(points)]
+    at = found.at(lattice.cell_of(points))
+    return np.unique(at[at > 0])

@@ -1,0 +1,190 @@
+"""Spatial chains from URDF, parsed by Pinocchio.
+
+The chain runs from `base_link` (fixed to the URDF's root) to `tip_link`: its joints must
+be revolute or continuous. Joints off that path (fingers, a second arm) are locked at
+zero with Pinocchio's `buildReducedModel`, which folds their links' geometry into the
+chain, and fixed joints are folded in the same way. Collision geometry is the links'
+`<collision>` elements: boxes, cylinders, spheres, capsules and meshes (loaded by
+Pinocchio; mesh paths are looked up next to the URDF and under `mesh_dirs`).
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import InputError
+from .chain import ChainModel
+from .geometry import Shape
+from .robot import LinkShape
+
+_REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
+_CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
+               'JointModelRevoluteUnboundedUnaligned')
+_PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
+
+
+def chain_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
+                    tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
+                    mesh_dirs: Sequence[str] = (), where: str = 'robot') -> ChainModel:
+    """Build the chain base_link → tip_link of a URDF (a string); tool at `tip_offset` [m].
+
+    `tip_offset` is in the tip link's frame. Bad input raises InputError naming
+    `<where>.file`, `<where>.base_link` or `<where>.tip_link`.
+    """
+    try:
+        ElementTree.fromstring(xml)
+    except ElementTree.ParseError as error:
+        raise InputError(f'{where}.file', f'is not valid XML ({error})') from None
+    try:
+        model = pin.buildModelFromXML(xml)
+    except (ValueError, RuntimeError) as error:
+        raise InputError(f'{where}.file', f'is not a URDF Pinocchio can read: '
+                         f'{_one_line(error)}') from None
+    base_link = base_link or _root_link(model)
+    base = _body_frame(model, base_link, f'{where}.base_link')
+    tip = _body_frame(model, tip_link, f'{where}.tip_link')
+    if model.frames[base].parentJoint != 0:
+        raise InputError(f'{where}.base_link', f'{base_link!r} moves with joint '
+                         f'{model.names[model.frames[base].parentJoint]!r}: the base must be '
+                         'fixed to the URDF\'s root link')
+    path = _joint_path(model, model.frames[tip].parentJoint)
+    if not path:
+        raise InputError(f'{where}.tip_link', f'no joint moves {tip_link!r} relative to '
+                         f'{base_link!r}')
+    for joint in path:
+        kind = model.joints[joint].shortname()
+        if kind not in _REVOLUTE + _CONTINUOUS:
+            what = 'prismatic' if kind in _PRISMATIC else 'floating or multi-axis'
+            raise InputError(f'{where}.file', f'joint {model.names[joint]!r} between '
+                             f'{base_link!r} and {tip_link!r} is {what} ({kind}): only '
+                             'revolute and continuous joints are supported')
+    try:
+        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION,
+                                               package_dirs=list(mesh_dirs))
+    except (ValueError, RuntimeError) as error:
+        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
+                         f'{_one_line(error)}') from None
+    locked = [j for j in range(1, model.njoints) if j not in path]
+    if locked:
+        model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
+    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
+                  where)
+
+
+def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_link: str,
+           tip_offset: np.ndarray, where: str) -> ChainModel:
+    """Read the reduced model (joints 1..n are the chain) into a ChainModel."""
+    n = model.njoints - 1
+    base_frame = model.frames[model.getFrameId(base_link)].placement.homogeneous
+    to_base = np.linalg.inv(base_frame)
+    placements = np.array([model.jointPlacements[j].homogeneous for j in range(1, n + 1)])
+    placements[0] = to_base @ placements[0]
+    tip = model.frames[model.getFrameId(tip_link)]
+    tool = tip.placement.homogeneous.copy()
+    tool[:3, 3] += tool[:3, :3] @ tip_offset
+    limits = []
+    for j in range(1, n + 1):
+        if model.joints[j].shortname() in _CONTINUOUS:
+            limits.append(None)
+        else:
+            k = model.joints[j].idx_q
+            low, high = float(model.lowerPositionLimit[k]), float(model.upperPositionLimit[k])
+            if not (-2.0 * np.pi <= low < high <= 2.0 * np.pi):
+                raise InputError(f'{where}.file', f'joint {model.names[j]!r} has limits '
+                                 f'[{low}, {high}]: a revolute joint\'s must be an interval '
+                                 'within ±2π [rad] (make it continuous to turn without limit)')
+            limits.append((low, high))
+    shapes = []
+    for item in geometry.geometryObjects:
+        placement = item.placement.homogeneous
+        if item.parentJoint == 0:
+            placement = to_base @ placement
+        shapes.append(LinkShape(int(item.parentJoint), _shape(item, where), placement))
+    link_names = [base_link] + [_child_link(model, j) for j in range(1, n + 1)]
+    return ChainModel(model.name, tuple(model.names[1:n + 1]), tuple(link_names), placements,
+                      _joint_axes(model, where), tool, tuple(limits), tuple(shapes),
+                      tool_frame=tip_link)
+
+
+def _joint_axes(model: pin.Model, where: str) -> np.ndarray:
+    """Return unit axes (n, 3) of the joints in their own frames (motion subspaces).
+
+    Raises InputError for a joint whose URDF axis is not a direction (e.g. xyz="0 0 0").
+    """
+    data = model.createData()
+    pin.computeJointJacobians(model, data, pin.neutral(model))
+    axes = []
+    for j in range(1, model.njoints):
+        local = pin.getJointJacobian(model, data, j, pin.ReferenceFrame.LOCAL)
+        axis = local[3:, model.joints[j].idx_v]
+        if not abs(np.linalg.norm(axis) - 1.0) <= 1e-9:
+            raise InputError(f'{where}.file', f'joint {model.names[j]!r} has the axis '
+                             f'{axis.tolist()}: a revolute joint\'s axis must be a direction')
+        axes.append(axis)
+    return np.array(axes)
+
+
+def _shape(item: pin.GeometryObject, where: str) -> Shape:
+    geometry = item.geometry
+    kind = type(geometry).__name__
+    if kind == 'Box':
+        return Shape('box', size=tuple(float(v) for v in 2.0 * np.asarray(geometry.halfSide)))
+    if kind == 'Cylinder':
+        return Shape('cylinder', radius=float(geometry.radius),
+                     length=2.0 * float(geometry.halfLength))
+    if kind == 'Capsule':
+        return Shape('capsule', radius=float(geometry.radius),
+                     length=2.0 * float(geometry.halfLength))
+    if kind == 'Sphere':
+        return Shape('sphere', radius=float(geometry.radius))
+    if kind.startswith('BVHModel'):
+        vertices = np.array(geometry.vertices(), dtype=float).reshape(-1, 3)
+        faces = np.array([[geometry.tri_indices(k)[c] for c in range(3)]
+                          for k in range(geometry.num_tris)], dtype=np.int64).reshape(-1, 3)
+        return Shape('mesh', vertices=vertices, faces=faces)
+    raise InputError(f'{where}.file', f'collision geometry {item.name!r} is a {kind}: '
+                     'use box, cylinder, sphere, capsule or mesh')
+
+
+def _root_link(model: pin.Model) -> str:
+    return next(f.name for f in model.frames if f.type == pin.FrameType.BODY)
+
+
+def _body_frame(model: pin.Model, name: str, where: str) -> int:
+    for k, frame in enumerate(model.frames):
+        if frame.name == name and frame.type == pin.FrameType.BODY:
+            return k
+    links = ', '.join(f.name for f in model.frames if f.type == pin.FrameType.BODY)
+    raise InputError(where, f'no link {name!r} in the URDF (links: {links})')
+
+
+def _joint_path(model: pin.Model, joint: int) -> list[int]:
+    """Joints from the root to `joint`, in order."""
+    path = []
+    while joint != 0:
+        path.append(joint)
+        joint = model.parents[joint]
+    return path[::-1]
+
+
+def _child_link(model: pin.Model, joint: int) -> str:
+    """Return the link a joint moves directly (its first body frame)."""
+    return next(f.name for f in model.frames
+                if f.type == pin.FrameType.BODY and f.parentJoint == joint)
+
+
+def _one_line(error: Exception, most: int = 300) -> str:
+    """Pinocchio's message in one line of at most `most` characters.
+
+    Its C++ errors span several lines (file, function, line, then the message): only the
+    message and what follows it are kept.
+    """
+    text = str(error)
+    if 'message:' in text:
+        text = text.split('message:', 1)[1]
+    text = ' '.join(text.split())
+    return text if len(text) <= most else text[:most - 3] + '...'

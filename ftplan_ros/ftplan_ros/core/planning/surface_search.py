@@ -1,0 +1,457 @@
+"""The paper's Steps 1-6 and the self-check, for one degree of redundancy (r = n - m = 1).
+
+Candidates θ_s are the obstacle-free points of M_s, one per continuation step (the
+manifold's `step_max` sets their spacing). Those passing the necessary condition (eq. 6)
+for every tolerated joint on one free arc of M_g get a failure surface over the smallest
+windows of that arc that hold a hit of every tolerated joint. Every such surface is
+built coarsely and scored by the smallest clearance at its vertices; the best-scored is
+built at full resolution and verified, then the next, until one passes. That criterion
+(recorded in the result's stats) prefers the start whose whole recovery region stays
+farthest from obstacles over the first start found.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numba
+import numpy as np
+
+from ..collision.checker import CollisionChecker
+from ..errors import InputError
+from ..model.angles import wrap_configuration
+from ..model.scene import Scene
+from ..paper.failure_planes import (
+    chord_crossings,
+    failure_plane_hits,
+    goal_free_arcs,
+    necessary_condition,
+)
+from ..paper.failure_surface import (
+    FailureSurface,
+    build_failure_surface,
+    choose_hits,
+    lift_goal_arc,
+    smallest_windows,
+)
+from ..paper.manifolds import (
+    ManifoldCache,
+    SelfMotionManifold,
+    mark_obstacle_free,
+    project_many,
+    project_to_preimage,
+)
+from ..paper.options import PlannerOptions
+from ..paper.result import PlanResult
+from ..paper.verification import verify_surface
+
+log = logging.getLogger(__name__)
+
+CRITERION = 'largest minimum clearance at the vertices of the failure surface'
+# [m] the ranking's clearances are cheap lower bounds (checker.py), tight below this
+_RANKING_CLEARANCE = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class _Search:
+    """The outcome of Steps 3-6 and the self-check over one set of start candidates."""
+
+    surface: FailureSurface | None
+    reason: str
+    stats: dict = field(default_factory=dict)
+    theta_S: np.ndarray | None = None
+    proposed: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class _Proposal:
+    """A (θ_s, arc, window) whose coarse web is collision-free at every vertex."""
+
+    score: float          # smallest vertex clearance [m] of the coarse web
+    candidate: int
+    arc: int
+    window: tuple[float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class _Ranking:
+    """Proposals as arrays, best first.
+
+    Scores (P,) [m] (as `_Proposal.score`), candidates (P,), arcs (P,), windows (P, 2).
+    """
+
+    scores: np.ndarray
+    candidates: np.ndarray
+    arcs: np.ndarray
+    windows: np.ndarray
+
+    def best(self, count: int) -> list[_Proposal]:
+        """Return the first `count` proposals."""
+        return [_Proposal(float(self.scores[k]), int(self.candidates[k]), int(self.arcs[k]),
+                          (float(self.windows[k, 0]), float(self.windows[k, 1])))
+                for k in range(min(count, len(self.scores)))]
+
+
+class SurfaceSearch:
+    """Plan a scene whose robot has one degree of redundancy (see the module docstring).
+
+    `scene.tolerated_joints` are the joints whose locks the surface is built for; the
+    others may block the way to the goal when they lock. A `checker` for the scene's
+    robot and obstacles may be passed in to share it.
+    """
+
+    def __init__(self, scene: Scene, options: PlannerOptions, rng: np.random.Generator,
+                 report: Callable[[str], None], cache: ManifoldCache,
+                 checker: CollisionChecker | None = None):
+        self.scene = scene
+        self.robot = scene.robot
+        self.task = scene.task
+        self.options = options
+        self.rng = rng
+        self.report = report
+        self.cache = cache
+        self.joints = scene.tolerated_joints
+        self.margin = options.verification.margin
+        self.checker = checker or CollisionChecker(self.robot, scene.obstacles)
+        self.x_s = np.asarray(self.task.start, dtype=float)
+        self.x_g = np.asarray(self.task.goal, dtype=float)
+
+    def run(self, start_configuration: np.ndarray | None = None,
+            subdivisions: tuple[int, ...] | None = None) -> PlanResult:
+        """Run Steps 1-6 and the self-check; with a start configuration, only that θ_s.
+
+        Start candidates come in rounds of `subdivisions` per manifold step, each round
+        only when the ones before found nothing: by default one, then
+        `options.candidate_refinement`.
+        """
+        M_s, M_g = self.manifolds()
+        arcs = goal_free_arcs(M_g, self.margin)
+        stats: dict = {'criterion': CRITERION, 'start_branches': len(M_s),
+                       'goal_branches': len(M_g), 'goal_free_arcs': len(arcs)}
+        arc_points = [M_g[arc.branch].arc_points(arc.first, arc.count) for arc in arcs]
+        arc_laps = [arc.lap for arc in arcs]
+        # Candidates one step apart along M_s and, when that finds nothing, between them
+        # (a narrow band of good starts).
+        refinements = [None] if start_configuration is not None else \
+            list(subdivisions or (1, self.options.candidate_refinement))
+        for subdivisions in refinements:
+            if subdivisions is None:
+                candidates = self._given_start(start_configuration)
+            else:
+                candidates = self._start_candidates(M_s, subdivisions)
+            search = self._search_preferred(candidates, arc_points, arc_laps)
+            stats.update(search.stats, start_candidates=len(candidates),
+                         candidate_subdivisions=subdivisions or 1)
+            if search.surface is not None or not arcs:
+                break
+            self.report(f'no plan from {len(candidates)} starts; trying starts between them')
+        stats['collision_checks'] = self.checker.checks
+        stats['tolerated_joints'] = [self.robot.joint_names[i] for i in self.joints]
+        return PlanResult(search.surface is not None, self.robot.joint_names, search.reason,
+                          search.surface, stats, M_s, M_g, search.theta_S, search.proposed,
+                          self.robot.periodic)
+
+    def manifolds(self) -> tuple[tuple[SelfMotionManifold, ...], tuple[SelfMotionManifold, ...]]:
+        """Trace M_s and M_g with the clearance of their points (Steps 1-2)."""
+        self.report('tracing self-motion manifolds')
+        manifolds = []
+        for name, x in (('task.start', self.x_s), ('task.goal', self.x_g)):
+            branches = self.cache.trace(self.robot, x, self.rng, self.options.manifold)
+            if not branches:
+                raise InputError(name, 'no configuration reaches it (inverse kinematics '
+                                 'failed)')
+            manifolds.append(tuple(mark_obstacle_free(b, self.checker, self.margin)
+                                   for b in branches))
+        return manifolds[0], manifolds[1]
+
+    # Issue 10: starts the caller prefers (approach.py: reachable from the arm along
+    # M_s^F) are searched first; all the candidates only when none of those plans.
+    prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def _search_preferred(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                          arc_laps: list[int]) -> _Search:
+        """Run `_search` on the candidates `prefer_starts` marks, then on all of them."""
+        if self.prefer_starts is not None:
+            preferred = candidates[np.asarray(self.prefer_starts(candidates), dtype=bool)]
+            search = self._search(preferred, arc_points, arc_laps) if len(preferred) else None
+            if search is not None and search.surface is not None:
+                return replace(search, stats=dict(search.stats, preferred_starts=len(preferred),
+                                                  start_preferred=True))
+        search = self._search(candidates, arc_points, arc_laps)
+        if self.prefer_starts is not None:
+            search = replace(search, stats=dict(search.stats, start_preferred=False))
+        return search
+
+    # Steps 3-6 ----------------------------------------------------------------------
+
+    def _search(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                arc_laps: list[int]) -> _Search:
+        """Run Steps 3-6 and the self-check for candidates (c, n) [rad] on the free arcs."""
+        if len(candidates) == 0:
+            return _Search(None, 'every start configuration collides (M_s^F is empty)')
+        if not arc_points:
+            return _Search(None, 'every goal configuration collides (M_g^F is empty)')
+
+        # Step 3: the necessary condition, on M_g^F as a whole (the paper's Θ_s) and per arc.
+        per_arc = np.stack([necessary_condition(self.robot, candidates, points, self.joints)
+                            for points in arc_points])  # (arcs, C, J)
+        theta_S = candidates[per_arc.any(axis=0).all(axis=1)]
+        single_arc = per_arc.all(axis=2)  # (arcs, C)
+        stats: dict = {'theta_S': len(theta_S)}
+        if len(theta_S) == 0:
+            options = self._blocking_joints(per_arc.any(axis=0))
+            stats['blocked_joints'] = [[self.robot.joint_names[j] for j in joints]
+                                       for joints in options]
+            everywhere = not per_arc.any(axis=(0, 1))[self.joints.index(options[0][0])]
+            return _Search(None, self._necessary_condition_reason(options, everywhere,
+                                                                  arc_points), stats, theta_S)
+        if not single_arc.any():
+            return _Search(None, 'the failure planes of every θ_s meet M_g^F only on '
+                           'different obstacle-free arcs: no failure surface can join them',
+                           stats, theta_S)
+
+        # Steps 4-6: failure surfaces, ranked by the clearance at their vertices.
+        self.report(f'{len(theta_S)} start configurations pass the necessary condition; '
+                    'building failure surfaces')
+        ranking = self._rank_proposals(candidates, arc_points, arc_laps, single_arc)
+        proposed = candidates[np.unique(ranking.candidates)]
+        stats['surfaces_proposed'] = len(ranking.scores)
+        if not len(ranking.scores):
+            return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
+                           'at one of its vertices', stats, theta_S, proposed)
+        return self._verify_best(candidates, arc_points, ranking, stats, theta_S, proposed)
+
+    def _verify_best(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                     ranking: _Ranking, stats: dict, theta_S: np.ndarray,
+                     proposed: np.ndarray) -> _Search:
+        """Self-check, best-ranked first: the first surface that passes wins."""
+        last_reason = ''
+        tried = 0
+        ranked = ranking.best(self.options.max_verifications)
+        for rank, proposal in enumerate(ranked, start=1):
+            surface = self._fine_surface(candidates[proposal.candidate],
+                                         arc_points[proposal.arc], proposal.window)
+            if surface is None:
+                continue
+            tried += 1
+            # A line per surface: one near an obstacle may take seconds to certify, and a
+            # caller's deadline (the planner node's plan_timeout) is checked at each line.
+            self.report(f'self-check of failure surface {rank} of {len(ranked)}')
+            verdict = verify_surface(surface, self.checker, self.task,
+                                     self.options.verification)
+            if verdict.ok:
+                self.report(f'verified the failure surface of start {tried} in the ranking')
+                stats.update(surfaces_tried=tried, criterion_value_m=proposal.score,
+                             min_clearance_m=verdict.min_clearance,
+                             recovery_min_clearance_m=verdict.recovery_min_clearance,
+                             goal_error_bound_m=verdict.max_goal_error,
+                             orientation_error_bound_rad=verdict.max_orientation_error,
+                             clearance_samples=verdict.clearance_samples)
+                return _Search(surface, '', stats, theta_S, proposed)
+            last_reason = verdict.reason
+            log.debug('surface rejected: %s', verdict.reason)
+        stats['surfaces_tried'] = tried
+        if not tried:
+            return _Search(None, f'none of the {len(ranked)} best failure surfaces proposed '
+                           'reached the self-check: at full resolution each web hits an '
+                           'obstacle at a vertex or misses the failure plane of a joint',
+                           stats, theta_S, proposed)
+        return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
+                       f'{last_reason}', stats, theta_S, proposed)
+
+    def _blocking_joints(self, passing: np.ndarray) -> list[list[int]]:
+        """Find the sets of joints whose failure planes keep the candidates from eq. 6.
+
+        `passing` (C, J) says which tolerated joint's plane meets M_g^F from which
+        candidate. Joints that no candidate passes block every plan: they are the one
+        set. Otherwise the sets missed by the candidates that miss the fewest joints are
+        the options, the most common first (`plan` tries the others' plans in turn).
+        """
+        never = [j for k, j in enumerate(self.joints) if not passing[:, k].any()]
+        if never:
+            return [never]
+        misses = ~passing
+        count = misses.sum(axis=1)
+        sets, counts = np.unique(misses[count == count.min()], axis=0, return_counts=True)
+        return [[j for k, j in enumerate(self.joints) if row[k]]
+                for row in sets[np.argsort(-counts, kind='stable')]]
+
+    def _necessary_condition_reason(self, options: list[list[int]], everywhere: bool,
+                                    arc_points: list[np.ndarray]) -> str:
+        """Say which joints' failure planes miss M_g^F, and why when a joint never moves.
+
+        `everywhere`: the first option's joints miss from every start (else each start
+        misses some joint, the nearest ones one of the options).
+        """
+        names = self.robot.joint_names
+        if everywhere:
+            reason = ('no candidate θ_s passes the necessary condition: the failure plane of '
+                      f'{", ".join(names[j] for j in options[0])} misses M_g^F from every start')
+        else:
+            sets = ' or '.join(', '.join(names[j] for j in joints) for joints in options[:3])
+            reason = ('no candidate θ_s passes the necessary condition for every joint at '
+                      f'once: the starts nearest to it miss the failure planes of {sets}')
+        for j in options[0] if everywhere else ():
+            if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
+                angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
+                reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
+                           f'self-motion ({", ".join(map(str, angles))} rad: a spherical '
+                           'shoulder and wrist fix the elbow for a pose): locked at any other '
+                           'angle it can never reach the goal')
+        return reason
+
+    def _given_start(self, theta: np.ndarray) -> np.ndarray:
+        """Move the given start onto M_s: a (1, n) candidate, or (0, n) if it collides."""
+        robot = self.robot
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (robot.n_joints,) or not np.all(np.isfinite(theta)):
+            raise InputError('start_configuration', f'must be {robot.n_joints} finite angles')
+        on_manifold = project_to_preimage(robot, self.x_s, theta)
+        if on_manifold is None or np.max(np.abs(on_manifold - theta)) > 0.1:
+            raise InputError('start_configuration', 'does not put the tool at task.start')
+        on_manifold = wrap_configuration(on_manifold, robot.periodic)[None, :]
+        if not self.checker.min_clearance(on_manifold, self.margin)[0] > self.margin:  # or NaN
+            return np.empty((0, robot.n_joints))
+        return on_manifold
+
+    def _start_candidates(self, branches: tuple[SelfMotionManifold, ...],
+                          subdivisions: int) -> np.ndarray:
+        """Obstacle-free configurations (c, n) [rad] of M_s, wrapped, `subdivisions` per step.
+
+        With one subdivision these are the traced points; with more, points between them
+        are interpolated and moved back onto M_s by Newton.
+        """
+        points = [np.empty((0, self.robot.n_joints))]
+        for branch in branches:
+            if subdivisions == 1:
+                points.append(branch.points[branch.free(self.margin)])
+                continue
+            ends = np.vstack([branch.points, branch.points[:1] + branch.period]) \
+                if branch.closed else branch.points
+            t = np.arange(subdivisions)[None, :, None] / subdivisions
+            between = (ends[:-1, None] + t * (ends[1:, None] - ends[:-1, None])).reshape(
+                -1, ends.shape[1])
+            solved, converged = project_many(self.robot, self.x_s, between)
+            solved = solved[converged & _within_limits(self.robot, solved)]
+            clear = self.checker.min_clearance(solved, self.margin, refine=False)
+            points.append(solved[clear > self.margin])
+        return wrap_configuration(np.vstack(points), self.robot.periodic)
+
+    def _rank_proposals(self, candidates: np.ndarray, arc_points: list[np.ndarray],
+                        arc_laps: list[int], single_arc: np.ndarray) -> _Ranking:
+        """Score a coarse failure surface for each (θ_s, arc) passing eq. 6; best first.
+
+        A coarse surface is the fan of straight paths from θ_s to its chord crossings (one
+        per tolerated joint) and to a few points spread over the window, all scored in one
+        clearance batch: a cheap screen, never a guarantee.
+        """
+        owners, arcs, windows, fans = [], [], [], []
+        for a, points in enumerate(arc_points):
+            members = np.flatnonzero(single_arc[a])
+            crossings = [chord_crossings(self.robot, candidates[members], points, i)
+                         for i in self.joints]
+            slots, spans, chosen = smallest_windows(
+                np.concatenate([which for which, _, _ in crossings]),
+                np.concatenate([np.full(len(which), k) for k, (which, _, _) in
+                                enumerate(crossings)]),
+                np.concatenate([positions for _, positions, _ in crossings]),
+                len(members), len(self.joints), arc_laps[a])
+            fans.append(np.concatenate([thetas for _, _, thetas in crossings])[chosen])
+            owners.append(members[slots])
+            arcs.append(np.full(len(slots), a))
+            windows.append(spans)
+        owners, arcs, windows = (np.concatenate(v) if v else np.zeros(0, dtype=np.int64)
+                                 for v in (owners, arcs, windows))
+        if not len(owners):
+            return _Ranking(np.zeros(0), owners, arcs, np.zeros((0, 2)))
+        fans = _coarse_fans(candidates, arc_points, owners, arcs, windows, np.concatenate(fans),
+                            self.joints, self.robot.periodic, self.options.coarse_waypoints)
+        clearance = self.checker.min_clearance(fans.reshape(-1, fans.shape[-1]),
+                                               self.margin + _RANKING_CLEARANCE,
+                                               refine=False).reshape(len(fans), -1).min(axis=1)
+        kept = np.flatnonzero(clearance > self.margin)
+        kept = kept[np.argsort(-clearance[kept], kind='stable')]  # best first, ties in order
+        return _Ranking(clearance[kept], owners[kept], arcs[kept], windows[kept])
+
+    def _fine_surface(self, theta_s: np.ndarray, arc_points: np.ndarray,
+                      window: tuple[float, float]) -> FailureSurface | None:
+        """Build the web to verify: exact hits, full resolution, the clearest nominal path."""
+        hits = failure_plane_hits(self.robot, self.x_g, theta_s, arc_points, self.joints)
+        inside = [[h for h in joint_hits if window[0] - 1 <= h.position <= window[1] + 1]
+                  for joint_hits in hits]
+        if not all(inside):
+            return None
+        window = (min(h.position for hs in inside for h in hs),
+                  max(h.position for hs in inside for h in hs))
+        chosen = choose_hits(inside, window)
+        lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, chosen, self.robot.periodic)
+        surface = build_failure_surface(theta_s, lifted, lifted_hits, window,
+                                        self.options.column_spacing,
+                                        self.options.waypoint_spacing)
+        clearance = self.checker.min_clearance(surface.vertices, self.margin).reshape(
+            surface.paths.shape[:2])
+        if not clearance.min() > self.margin:  # or NaN
+            return None
+        # Nominal path: the clearest, and among equally clear ones the shortest.
+        lengths = np.linalg.norm(surface.goal_points - theta_s, axis=1)
+        nominal = int(np.lexsort((lengths, -clearance.min(axis=1)))[0])
+        return replace(surface, nominal=nominal)
+
+
+def _within_limits(robot, thetas: np.ndarray) -> np.ndarray:
+    """(N,) bool: configurations (N, n) inside the joint limits (periodic joints always)."""
+    limits = robot.limits
+    inside = (thetas >= limits[:, 0]) & (thetas <= limits[:, 1])
+    return np.all(inside | robot.periodic, axis=1)
+
+
+def _coarse_fans(candidates: np.ndarray, arc_points: list[np.ndarray], owners: np.ndarray,
+                 arcs: np.ndarray, windows: np.ndarray, hits: np.ndarray,
+                 joints: tuple[int, ...], periodic: np.ndarray, waypoints: int) -> np.ndarray:
+    """Points (P, m, n) [rad] of straight paths from each θ_s to its hits and across its window.
+
+    Proposal p is candidate `owners[p]` on arc `arcs[p]` with its window (2,) [arc points];
+    `hits` (P, J, n) are the chosen hit of each tolerated joint. The arc and the hits are
+    lifted as `lift_goal_arc` does.
+    """
+    theta_s = candidates[owners]  # (P, n)
+    count = len(owners)
+    joints = np.asarray(joints)
+    rows = np.arange(count)[:, None]
+    shift = np.zeros_like(theta_s)
+    turns = 2.0 * np.pi * np.round((theta_s[:, joints] - hits[rows, np.arange(len(joints)),
+                                                             joints]) / (2.0 * np.pi))
+    shift[:, joints] = np.where(periodic[joints], turns, 0.0)
+    lifted = hits + shift[:, None, :]
+    lifted[rows, np.arange(len(joints)), joints] = theta_s[:, joints]
+    spread = np.empty((count, 5, theta_s.shape[1]))
+    for a, points in enumerate(arc_points):
+        mine = arcs == a
+        if not mine.any():
+            continue
+        at = windows[mine, :1] + np.linspace(0.0, 1.0, 5)[None, :] * (
+            windows[mine, 1:] - windows[mine, :1])
+        k = np.minimum(at.astype(int), len(points) - 2)
+        t = (at - k)[..., None]
+        spread[mine] = points[k] + t * (points[k + 1] - points[k])
+    goals = np.concatenate([lifted, spread + shift[:, None, :]], axis=1)  # (P, J+5, n)
+    return straight_fans(theta_s, goals, waypoints).reshape(count, -1, theta_s.shape[1])
+
+
+@numba.njit(cache=True)
+def straight_fans(starts, goals, waypoints):
+    """Points (P, W, G, n) [rad] w/W of the way from each start (P, n) to its goals (P, G, n).
+
+    w = 1..W. Compiled: numpy's broadcasting over rows of n = 3 angles took ten times as long.
+    """
+    count, targets, n = goals.shape
+    out = np.empty((count, waypoints, targets, n))
+    for p in range(count):
+        for w in range(waypoints):
+            step = (w + 1) / waypoints
+            for g in range(targets):
+                for a in range(n):
+                    out[p, w, g, a] = starts[p, a] + step * (goals[p, g, a] - starts[p, a])
+    return out
