@@ -36,6 +36,15 @@ def wrap_configuration(thetas: np.ndarray, periodic: np.ndarray) -> np.ndarray:
     return np.where(periodic, wrap_angle(thetas), thetas)
 
 
+def whole_turns(a: np.ndarray, b: np.ndarray, periodic: np.ndarray) -> np.ndarray:
+    """Return the shift (..., n) [rad] that brings b next to a: whole turns on periodic joints.
+
+    b + shift lies within π of a in every periodic joint; the other joints never shift (0).
+    """
+    turns = np.round((np.asarray(a, dtype=float) - np.asarray(b, dtype=float)) / (2.0 * np.pi))
+    return np.where(periodic, 2.0 * np.pi * turns, 0.0)
+
+
 def configuration_difference(a: np.ndarray, b: np.ndarray, periodic: np.ndarray) -> np.ndarray:
     """Shortest joint-space step a - b (..., n) [rad], going round for periodic joints."""
     diff = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)

@@ -19,6 +19,7 @@ from functools import cached_property
 import numba
 import numpy as np
 
+from ..model.angles import whole_turns
 from .failure_planes import FailurePlaneHit
 
 # What the checks of a web say when `FailureSurface.is_finite` is False.
@@ -248,9 +249,8 @@ def lift_goal_arc(theta_s: np.ndarray, arc_points: np.ndarray,
     """
     shift = np.zeros(len(theta_s))
     for hit in hits:
-        i = hit.joint
-        if periodic[i]:
-            shift[i] = 2.0 * np.pi * np.round((theta_s[i] - hit.theta[i]) / (2.0 * np.pi))
+        shift[hit.joint] = whole_turns(theta_s[hit.joint], hit.theta[hit.joint],
+                                       periodic[hit.joint])
     lifted = []
     for hit in hits:
         theta = hit.theta + shift

@@ -49,7 +49,7 @@ from ..grid.free_components import (
     proof_grids,
     tolerant_start_out_of_reach,
 )
-from ..model.angles import configuration_difference
+from ..model.angles import configuration_difference, whole_turns
 from ..model.paths import densify, path_length
 from ..model.robot import Robot, task_errors
 from ..model.scene import Scene
@@ -180,8 +180,7 @@ class ApproachPlanner:
                 # its end, where the points are a period further).
                 nearest = arc[int(np.argmin(np.max(np.abs(configuration_difference(
                     arc, q, robot.periodic)), axis=1)))]
-                turns = np.where(robot.periodic, np.round((nearest - q) / (2.0 * np.pi)), 0.0)
-                return arc - 2.0 * np.pi * turns
+                return arc - whole_turns(nearest, q, robot.periodic)
         return None
 
     def prefer_reachable(self, arc: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:

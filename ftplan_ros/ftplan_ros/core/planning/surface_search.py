@@ -21,7 +21,7 @@ import numpy as np
 
 from ..collision.checker import CollisionChecker
 from ..errors import InputError
-from ..model.angles import wrap_configuration
+from ..model.angles import whole_turns, wrap_configuration
 from ..model.scene import Scene
 from ..paper.failure_planes import (
     chord_crossings,
@@ -421,9 +421,8 @@ def _coarse_fans(candidates: np.ndarray, arc_points: list[np.ndarray], owners: n
     joints = np.asarray(joints)
     rows = np.arange(count)[:, None]
     shift = np.zeros_like(theta_s)
-    turns = 2.0 * np.pi * np.round((theta_s[:, joints] - hits[rows, np.arange(len(joints)),
-                                                             joints]) / (2.0 * np.pi))
-    shift[:, joints] = np.where(periodic[joints], turns, 0.0)
+    shift[:, joints] = whole_turns(theta_s[:, joints], hits[rows, np.arange(len(joints)), joints],
+                                   periodic[joints])
     lifted = hits + shift[:, None, :]
     lifted[rows, np.arange(len(joints)), joints] = theta_s[:, joints]
     spread = np.empty((count, 5, theta_s.shape[1]))
