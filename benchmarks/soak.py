@@ -39,9 +39,10 @@ import rclpy  # noqa: E402  (after the environment: rclpy reads it at init)
 from rclpy.context import Context  # noqa: E402
 from rclpy.logging import LoggingSeverity  # noqa: E402
 
-from ftplan_ros.bringup import Director, Progress, Suite  # noqa: E402
+from ftplan_ros.bringup import Director, Suite  # noqa: E402
 from ftplan_ros.core import load_scene  # noqa: E402
 from ftplan_ros.plan_client import PlanClient  # noqa: E402
+from ftplan_ros.progress import Progress  # noqa: E402
 
 SCENES = [REPO / 'config' / 'scenes' / f'{name}.yaml'
           for name in ('fig3a', 'crowded_sheets_100')] + [

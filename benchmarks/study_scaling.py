@@ -37,7 +37,7 @@ import numpy as np
 import psutil
 import yaml
 
-from ftplan_ros.cli import Progress
+from ftplan_ros.progress import Progress
 from ftplan_ros.study import ResultStore, load_study, open_client, run_study
 from ftplan_ros.study.tasks import task_inputs
 

@@ -21,7 +21,6 @@ import argparse
 import signal
 import sys
 import threading
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,24 +51,10 @@ from .nodes.topics import (
     SIM_NODE,
 )
 from .plan_client import Outcome, PlanClient, PlannedMotion
+from .progress import Progress
 
 SIM_STATUS = f'{SIM_NODE}: arm'
 INJECTOR_STATUS = f'{INJECTOR_NODE}: drills'
-
-
-class Progress:
-    """Progress lines on stderr with the time elapsed."""
-
-    def __init__(self, stream=sys.stderr, quiet: bool = False):
-        self.stream = stream
-        self.quiet = quiet
-        self.started = time.perf_counter()
-
-    def line(self, text: str) -> None:
-        """Print one progress line."""
-        if not self.quiet:
-            print(f'[{time.perf_counter() - self.started:7.2f} s] {text}', file=self.stream,
-                  flush=True)
 
 
 @dataclass(frozen=True)
@@ -319,7 +304,7 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as error:
         print(f'ftplan-bringup: error: {error}', file=sys.stderr)
         return 2
-    progress = Progress()
+    progress = Progress(width=7)
     runs_wanted = len(args.drill) + args.trials or 1
     try:
         rclpy.init(args=['--ros-args'] + (args.ros_args or []),

@@ -18,7 +18,6 @@ import argparse
 import json
 import logging
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -33,58 +32,9 @@ from .core import (
 )
 from .core.model.task_space import format_point
 from .core.planning.drill import drill_json, drilled_motion, run_drill, summarize_drill
+from .progress import Progress
 
 log = logging.getLogger('ftplan')
-
-
-class Progress:
-    """Progress lines on stderr for work that takes more than a second.
-
-    `clock` returns seconds (time.perf_counter; tests pass their own).
-    """
-
-    def __init__(self, stream=sys.stderr, clock=time.perf_counter):
-        self.stream = stream
-        self.clock = clock
-        self.started = clock()
-        self.last = -1.0
-        self.base = (self.started, 0)  # (time, items done then): where the rate counts from
-
-    def line(self, text: str) -> None:
-        """Print a stage of the work with the time elapsed."""
-        print(f'[{self.clock() - self.started:6.2f} s] {text}', file=self.stream, flush=True)
-
-    def begin(self, done: int = 0) -> None:
-        """Count the rate from now, `done` items being finished already (e.g. by an earlier run)."""
-        self.base = (self.clock(), done)
-
-    def count(self, done: int, total: int, unit: str = '') -> None:
-        """Print `done/total`, the rate and the time left, at most once a second and at the end.
-
-        E.g. `1200/3721 tasks, 96.3 tasks/s, ETA 26 s`; the rate is over the items done
-        since `begin` (or since this object was made).
-        """
-        now = self.clock()
-        if done != total and now - self.last < 1.0:
-            return
-        self.last = now
-        text = f'{done}/{total}' + (f' {unit}' if unit else '')
-        since, done_before = self.base
-        if now > since and done > done_before:
-            rate = (done - done_before) / (now - since)
-            text += f', {rate:.1f} {unit or "items"}/s'
-            if done < total:
-                text += f', ETA {_duration((total - done) / rate)}'
-        self.line(text)
-
-
-def _duration(seconds: float) -> str:
-    """Seconds as '42 s', '12.5 min' or '3.2 h'."""
-    if seconds < 120:
-        return f'{seconds:.0f} s'
-    if seconds < 7200:
-        return f'{seconds / 60:.1f} min'
-    return f'{seconds / 3600:.1f} h'
 
 
 def main(argv: list[str] | None = None) -> int:

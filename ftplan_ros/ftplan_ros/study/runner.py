@@ -87,7 +87,7 @@ def run_study(study: Study, store: ResultStore, client: Client, progress=None,
               plan_task: Callable[[Study, int], dict] | None = None) -> StudyRun:
     """Compute the study's unfinished chunks on `client`'s cluster and store them.
 
-    `progress` has `line(text)` and `count(done, total, unit)` (cli.Progress); `plan_task`
+    `progress` has `line(text)` and `count(done, total, unit)` (progress.Progress); `plan_task`
     replaces `tasks.plan_study_task` on the workers (benchmarks time Dask with a no-op).
     Raises StudyError when a chunk fails for another reason than a dying worker.
     """
