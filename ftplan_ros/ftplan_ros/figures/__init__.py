@@ -26,7 +26,6 @@ from ..core.model.scene import Scene
 from ..core.paper.result import PlanResult
 from . import planar, progress, spatial
 from .joint_space_3d import _c_space_obstacle_cells, draw_joint_space
-from .planar import draw_scenery as _draw_scenery
 from .style import (
     DPI,
     FAILURE_COLOUR,
@@ -39,13 +38,10 @@ from .style import (
     new_figure,
 )
 
-_new_figure = new_figure  # the names study/figures.py imports
-
 __all__ = [
     'DPI', 'FAILURE_COLOUR', 'FINAL_COLOUR', 'GOAL_COLOUR', 'HIT_COLOURS', 'SNAPSHOTS',
-    'START_COLOUR', 'SURFACE_COLOUR', '_c_space_obstacle_cells', '_draw_scenery',
-    '_new_figure', 'joint_space_figure', 'motion_figure', 'plan_figure', 'save_figure',
-    'workspace_figure',
+    'START_COLOUR', 'SURFACE_COLOUR', '_c_space_obstacle_cells', 'joint_space_figure',
+    'motion_figure', 'plan_figure', 'save_figure', 'workspace_figure',
 ]
 
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
 from scipy.spatial import ConvexHull, QhullError
 
@@ -26,6 +25,7 @@ from .style import (
     SNAPSHOTS,
     TRACE_STEP,
     degrees_text,
+    draw_arm,
     hit_colour,
     reason_title,
 )
@@ -41,12 +41,12 @@ def draw_workspace(ax: Axes, scene: Scene, result: PlanResult) -> None:
     if result.feasible and surface is not None:
         hits = surface.goal_points[list(surface.hit_paths)]
         for i, hit in enumerate(hits):
-            _draw_arm(ax, robot, hit, hit_colour(i), width=1.6, alpha=0.8,
-                      label=f'H{i + 1} hit', gid=f'arm:H{i + 1}', marker_size=4.0)
+            draw_arm(ax, robot.joint_positions(hit), hit_colour(i), width=1.6, alpha=0.8,
+                     label=f'H{i + 1} hit', gid=f'arm:H{i + 1}', marker_size=4.0)
         ax.plot(*_tip_trace(robot, surface.nominal_path).T, '--', color='k', lw=1.3,
                 gid='trace', label='nominal path (end effector)')
-        _draw_arm(ax, robot, surface.theta_s, 'k', width=3.5, label=r'$\theta_s$',
-                  gid='arm:theta_s', zorder=5)
+        draw_arm(ax, robot.joint_positions(surface.theta_s), 'k', width=3.5,
+                 label=r'$\theta_s$', gid='arm:theta_s', zorder=5)
         title = rf'{scene.name}: $\theta_s$ = {degrees_text(surface.theta_s)}'
     else:
         title = reason_title(result)
@@ -83,10 +83,7 @@ def _finish_workspace(ax: Axes, robot: PlanarChain, title: str) -> None:
     ax.margins(0.12)
     ax.autoscale_view()
     ax.set_autoscale_on(False)
-    reach = float(np.sum(robot.link_lengths))
-    ring = np.linspace(0.0, 2.0 * np.pi, 241)
-    ax.plot(reach * np.cos(ring), reach * np.sin(ring), ':', color='0.6', lw=0.9, gid='reach',
-            label='_nolegend_')
+    draw_reach(ax, float(np.sum(robot.link_lengths)), '0.6', '_nolegend_')
     ax.set_aspect('equal', adjustable='box')
     ax.set_xlabel('x [m]')
     ax.set_ylabel('y [m]')
@@ -95,15 +92,11 @@ def _finish_workspace(ax: Axes, robot: PlanarChain, title: str) -> None:
     ax.legend(loc='upper left', bbox_to_anchor=(1.02, 1.0), fontsize='small')
 
 
-def _draw_arm(ax: Axes, robot: PlanarChain, theta: np.ndarray, colour: str, width: float,
-              label: str, gid: str, alpha: float = 1.0, zorder: float = 3,
-              marker_size: float = 6.0) -> Line2D:
-    """Draw the links of configuration theta (n,) [rad] as one line with a dot per joint."""
-    points = robot.joint_positions(np.asarray(theta, dtype=float))
-    (line,) = ax.plot(points[:, 0], points[:, 1], '-o', color=colour, lw=width, ms=marker_size,
-                      alpha=alpha, zorder=zorder, gid=gid, label=label,
-                      solid_capstyle='round')
-    return line
+def draw_reach(ax: Axes, reach: float, colour: str, label: str) -> None:
+    """Draw the circle of radius `reach` [m] about the base, dotted: as far as the arm reaches."""
+    ring = np.linspace(0.0, 2.0 * np.pi, 241)
+    ax.plot(reach * np.cos(ring), reach * np.sin(ring), ':', color=colour, lw=0.9, gid='reach',
+            label=label)
 
 
 def _tip_trace(robot: PlanarChain, path: np.ndarray) -> np.ndarray:
@@ -195,9 +188,10 @@ def draw_motion(ax: Axes, scene: Scene, motion: np.ndarray, failure_index: int |
     fractions = np.linspace(0.0, 1.0, SNAPSHOTS) if len(motion) > 1 else [0.0]
     for k, fraction in enumerate(fractions):
         theta = point_at_fraction(motion, fraction) if len(motion) > 1 else motion[0]
-        _draw_arm(ax, robot, theta, '0.3', width=1.4, alpha=0.12 + 0.3 * k / len(fractions),
-                  label='arm along the motion' if k == 0 else '_nolegend_', gid='snapshot',
-                  marker_size=3.5)
+        draw_arm(ax, robot.joint_positions(theta), '0.3', width=1.4,
+                 alpha=0.12 + 0.3 * k / len(fractions),
+                 label='arm along the motion' if k == 0 else '_nolegend_', gid='snapshot',
+                 marker_size=3.5)
     split = len(motion) - 1 if failure_index is None else failure_index
     before, after = motion[:split + 1], motion[split:]
     ax.plot(*_tip_trace(robot, before).T, '--' if failure_index is not None else '-',
@@ -208,14 +202,14 @@ def draw_motion(ax: Axes, scene: Scene, motion: np.ndarray, failure_index: int |
                 gid='trace:recovery', label='end effector after the failure')
     if failure_index is not None:
         failed = motion[failure_index]
-        _draw_arm(ax, robot, failed, FAILURE_COLOUR, width=3.0, label='at the failure',
-                  gid='arm:failure', zorder=5)
+        draw_arm(ax, robot.joint_positions(failed), FAILURE_COLOUR, width=3.0,
+                 label='at the failure', gid='arm:failure', zorder=5)
         if locked_joint is not None:
             where = robot.joint_positions(failed)[locked_joint]
             ax.plot(*where, 'o', ms=19, mfc='none', mec=FAILURE_COLOUR, mew=2.5, zorder=6,
                     gid='locked_joint', label=f'{robot.joint_names[locked_joint]} locked at '
                     f'{np.degrees(failed[locked_joint]):.1f}°')
-    _draw_arm(ax, robot, motion[-1], FINAL_COLOUR, width=3.0, label='final', gid='arm:final',
-              zorder=5)
+    draw_arm(ax, robot.joint_positions(motion[-1]), FINAL_COLOUR, width=3.0, label='final',
+             gid='arm:final', zorder=5)
     draw_task(ax, scene)
     _finish_workspace(ax, robot, title)

@@ -16,7 +16,6 @@ import textwrap
 import numpy as np
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure, SubFigure
-from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -36,6 +35,7 @@ from .style import (
     SNAPSHOTS,
     TRACE_STEP,
     degrees_text,
+    draw_arm,
     hit_colour,
     reason_title,
 )
@@ -74,13 +74,13 @@ def draw_workspace(ax: Axes3D, scene: Scene, result: PlanResult, legend_below: b
     _draw_base(ax, robot)
     if feasible:
         for i, hit in zip(surface.tolerated, hits, strict=True):
-            _draw_arm(ax, robot, hit, hit_colour(i), width=1.3, alpha=0.85, zorder=3,
-                      label=f'H{i + 1} hit ({robot.joint_names[i]} locked)',
-                      gid=f'arm:H{i + 1}', marker_size=3.0)
+            draw_arm(ax, robot.skeleton(hit), hit_colour(i), width=1.3, alpha=0.85, zorder=3,
+                     label=f'H{i + 1} hit ({robot.joint_names[i]} locked)',
+                     gid=f'arm:H{i + 1}', marker_size=3.0)
         ax.plot(*trace.T, '--', color='k', lw=1.4, zorder=4, gid='trace',
                 label='nominal path (tool)')
-        _draw_arm(ax, robot, surface.theta_s, 'k', width=3.2, zorder=5, label=r'$\theta_s$',
-                  gid='arm:theta_s', marker_size=5.5)
+        draw_arm(ax, robot.skeleton(surface.theta_s), 'k', width=3.2, zorder=5,
+                 label=r'$\theta_s$', gid='arm:theta_s', marker_size=5.5)
         title = '\n'.join([scene.name, rf'$\theta_s$ = {degrees_text(surface.theta_s)}',
                            _wrap(_tolerated_text(robot, surface.tolerated))])
     else:
@@ -105,9 +105,10 @@ def draw_motion(ax: Axes3D, scene: Scene, motion: np.ndarray, failure_index: int
     _draw_obstacles(ax, scene.obstacles, lower, upper)
     _draw_base(ax, robot)
     for k, theta in enumerate(snapshots):
-        _draw_arm(ax, robot, theta, '0.3', width=1.2, alpha=0.12 + 0.3 * k / len(snapshots),
-                  zorder=2, label='arm along the motion' if k == 0 else '_nolegend_',
-                  gid='snapshot', marker_size=2.5)
+        draw_arm(ax, robot.skeleton(theta), '0.3', width=1.2,
+                 alpha=0.12 + 0.3 * k / len(snapshots), zorder=2,
+                 label='arm along the motion' if k == 0 else '_nolegend_', gid='snapshot',
+                 marker_size=2.5)
     ax.plot(*before.T, '--' if failure_index is not None else '-', color='k', lw=1.3,
             zorder=4, gid='trace', label='tool' + (
                 ' before the failure' if failure_index is not None else ''))
@@ -116,16 +117,16 @@ def draw_motion(ax: Axes3D, scene: Scene, motion: np.ndarray, failure_index: int
                 label='tool after the failure')
     if failure_index is not None:
         failed = motion[failure_index]
-        _draw_arm(ax, robot, failed, FAILURE_COLOUR, width=3.0, zorder=5,
-                  label='at the failure', gid='arm:failure')
+        draw_arm(ax, robot.skeleton(failed), FAILURE_COLOUR, width=3.0, zorder=5,
+                 label='at the failure', gid='arm:failure', marker_size=5.0)
         if locked_joint is not None:
             where = _joint_points(robot, failed)[locked_joint]
             ax.plot(*where[:, None], 'o', ms=17, mfc='none', mec=FAILURE_COLOUR, mew=2.5,
                     zorder=6, gid='locked_joint',
                     label=f'{robot.joint_names[locked_joint]} locked at '
                           f'{np.degrees(failed[locked_joint]):.1f}°')
-    _draw_arm(ax, robot, motion[-1], FINAL_COLOUR, width=3.0, zorder=5, label='final',
-              gid='arm:final')
+    draw_arm(ax, robot.skeleton(motion[-1]), FINAL_COLOUR, width=3.0, zorder=5, label='final',
+             gid='arm:final', marker_size=5.0)
     _draw_task(ax, scene, lower, upper)
     _finish(ax, robot, lower, upper, _wrap(title), drawn)
 
@@ -141,16 +142,6 @@ def _joint_points(robot: Robot, theta: np.ndarray) -> np.ndarray:
 
 
 # --- the arm and the task --------------------------------------------------------------------
-
-def _draw_arm(ax: Axes3D, robot: Robot, theta: np.ndarray, colour: str, width: float,
-              label: str, gid: str, zorder: float, alpha: float = 1.0,
-              marker_size: float = 5.0) -> Line2D:
-    """Draw the skeleton of configuration theta (n,) [rad] as one line with a dot per point."""
-    points = robot.skeleton(np.asarray(theta, dtype=float))
-    (line,) = ax.plot(*points.T, '-o', color=colour, lw=width, ms=marker_size, alpha=alpha,
-                      zorder=zorder, gid=gid, label=label, solid_capstyle='round')
-    return line
-
 
 def _draw_base(ax: Axes3D, robot: Robot) -> None:
     """Mark the robot's base frame origin [m] with a black square."""

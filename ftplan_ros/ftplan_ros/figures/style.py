@@ -1,12 +1,14 @@
-"""What every figure shares: colours, sizes, the Agg figure and the text of angles and reasons."""
+"""What every figure shares: colours, sizes, the Agg figure, the arm, text of angles and reasons."""
 
 from __future__ import annotations
 
 import textwrap
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from ..core.paper.result import PlanResult
 
@@ -31,6 +33,18 @@ def new_figure(size: tuple[float, float]) -> Figure:
     figure = Figure(figsize=size, layout='constrained')
     FigureCanvasAgg(figure)
     return figure
+
+
+def draw_arm(ax: Axes, points: np.ndarray, colour: str, width: float, label: str, gid: str,
+             zorder: float = 3, alpha: float = 1.0, marker_size: float = 6.0) -> Line2D:
+    """Draw an arm's points (k, 2) or (k, 3) [m] (base, joints, tool) as one line with dots.
+
+    `ax` is 2-D axes for points (k, 2), mplot3d axes for points (k, 3).
+    """
+    (line,) = ax.plot(*points.T, '-o', color=colour, lw=width, ms=marker_size,
+                      alpha=alpha, zorder=zorder, gid=gid, label=label,
+                      solid_capstyle='round')
+    return line
 
 
 def hit_colour(joint: int) -> str:

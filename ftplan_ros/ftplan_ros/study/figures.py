@@ -16,7 +16,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
-from ..figures import GOAL_COLOUR, _draw_scenery, _new_figure
+from ..figures.planar import draw_reach, draw_scenery
+from ..figures.style import GOAL_COLOUR, new_figure
 from .results import OUTCOMES
 from .spec import PositionGrid, Study
 from .summary import feasible_rate_by
@@ -46,7 +47,7 @@ def map_figure(study: Study, table: pa.Table) -> Figure:
                         table.column('feasible').to_pylist(), strict=True)])
     x_edges, y_edges = (_edges(values, other) for values, other in
                         ((grid.axes[0], grid.axes[1]), (grid.axes[1], grid.axes[0])))
-    figure = _new_figure((12.0, 7.2))
+    figure = new_figure((12.0, 7.2))
     outcome_ax, clearance_ax = figure.subplots(1, 2, sharex=True, sharey=True)
 
     outcome_ax.pcolormesh(x_edges, y_edges, np.ma.masked_invalid(codes),
@@ -80,7 +81,7 @@ def sweep_figure(study: Study, table: pa.Table) -> Figure:
     Rates are over the tasks that did not raise; each point is labelled with its task count.
     """
     rates = feasible_rate_by(table, 'random_obstacles')
-    figure = _new_figure((8.0, 5.0))
+    figure = new_figure((8.0, 5.0))
     ax = figure.add_subplot()
     x = rates['value'].astype(float)
     if len(x) > 1:
@@ -128,7 +129,7 @@ def _edges(values: tuple[float, ...], other: tuple[float, ...]) -> np.ndarray:
 
 def _finish_map(ax: Axes, study: Study, title: str, handles: list) -> None:
     scene = study.scene
-    _draw_scenery(ax, scene)
+    draw_scenery(ax, scene)
     fixed = 'goal' if study.vary.endpoint == 'start' else 'start'
     point = getattr(scene.task, fixed)
     if fixed == 'goal':
@@ -137,10 +138,7 @@ def _finish_map(ax: Axes, study: Study, title: str, handles: list) -> None:
     else:
         ax.plot(*point, 'o', ms=10, mfc='white', mec='k', mew=1.8, zorder=7, gid='x_s',
                 label=r'start $\mathbf{x}_s$')
-    reach = float(scene.robot.tip_lever_arms()[0])
-    ring = np.linspace(0.0, 2.0 * np.pi, 241)
-    ax.plot(reach * np.cos(ring), reach * np.sin(ring), ':', color='0.3', lw=0.9, gid='reach',
-            label='reach')
+    draw_reach(ax, float(scene.robot.tip_lever_arms()[0]), '0.3', 'reach')
     ax.set_aspect('equal', adjustable='box')
     ax.set_xlabel('x [m]')
     ax.set_ylabel('y [m]')
