@@ -36,7 +36,7 @@ from sensor_msgs.msg import JointState
 from ftplan_msgs_py import read_joint_state
 
 from .core import InputError, Scene, check_plannable, load_scene
-from .core.model.task_space import format_point
+from .core.model.task_space import describe_point
 from .nodes.executor import ExecutorNode
 from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode
@@ -134,8 +134,8 @@ class Director:
             raise InputError('task', f'scene {self.scene.name} has no task to plan')
         if not self.client.wait_until_ready(timeout=10.0):
             return PlannedMotion(Outcome.UNAVAILABLE, 'the planner or executor did not start')
-        self.progress.line(f'planning {self.scene.name}: {format_point(task.kind, task.start)}'
-                           f' -> {format_point(task.kind, task.goal)} m')
+        self.progress.line(f'planning {self.scene.name}: {describe_point(task.kind, task.start)}'
+                           f' -> {describe_point(task.kind, task.goal)} m')
         self.motion = self.client.plan(goal=task.goal, start=task.start,
                                        frame_id=self.scene.frame_id, timeout=timeout)
         return self.motion

@@ -30,7 +30,7 @@ from .core import (
     load_scene,
     plan,
 )
-from .core.model.task_space import format_point
+from .core.model.task_space import describe_point
 from .core.planning.drill import drill_json, drilled_motion, run_drill, summarize_drill
 from .progress import Progress
 
@@ -244,8 +244,8 @@ def _describe(scene, result) -> str:
     """Describe the outcome in a few lines: θ_s and hits in degrees, time and checks."""
     stats = result.stats
     task, names = scene.task, scene.robot.joint_names
-    lines = [f'scene {scene.name}: {task.kind} task {format_point(task.kind, task.start)} -> '
-             f'{format_point(task.kind, task.goal)} m, {len(scene.obstacles)} obstacles']
+    lines = [f'scene {scene.name}: {task.kind} task {describe_point(task.kind, task.start)} -> '
+             f'{describe_point(task.kind, task.goal)} m, {len(scene.obstacles)} obstacles']
     if not result.feasible:
         lines.append(f'no failure-tolerant plan: {result.reason}')
     else:

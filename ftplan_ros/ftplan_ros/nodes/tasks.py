@@ -11,19 +11,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ftplan_ros.core import InputError, PlanarChain, Robot, SpatialArm
-from ftplan_ros.core.model.task_space import KINDS, POINT_SIZE
+from ftplan_ros.core.model.task_space import KINDS, kind_of_point
 
 SPATIAL_KINDS = ('position', 'axis', 'pose')
-_KIND_OF_SIZE = {size: kind for kind, size in POINT_SIZE.items()}
 _Z = np.array([0.0, 0.0, 1.0])
-
-
-def kind_of_point(x) -> str:
-    """Return the kind of a task point from its size (2, 3, 6 or 7 numbers)."""
-    kind = _KIND_OF_SIZE.get(len(x))
-    if kind is None:
-        raise ValueError(f'a task point has 2, 3, 6 or 7 numbers, got {len(x)}')
-    return kind
 
 
 def check_task_kind(value: str) -> str | None:

@@ -16,7 +16,7 @@ from ..errors import InputError
 from ..validation import LARGEST_NUMBER
 from .robot import Robot
 from .spatial import SpatialArm
-from .task_space import POINT_SIZE
+from .task_space import kind_of_point
 
 OBSTACLE_TYPES = ('sphere', 'box', 'cylinder')
 
@@ -61,12 +61,7 @@ class Obstacle:
 
 
 DEFAULT_GOAL_TOLERANCE = 0.01  # [m]
-
-
 DEFAULT_ORIENTATION_TOLERANCE = 0.01  # [rad]
-
-
-_KIND_OF_SIZE = {size: kind for kind, size in POINT_SIZE.items()}
 
 
 @dataclass(frozen=True)
@@ -85,7 +80,7 @@ class Task:
     @property
     def kind(self) -> str:
         """'planar', 'position', 'axis' or 'pose', from the size of the task points."""
-        return _KIND_OF_SIZE[len(self.goal)]
+        return kind_of_point(self.goal)
 
     def reached(self, errors: np.ndarray) -> np.ndarray:
         """Whether task errors (..., 2) [m, rad] (`robot.task_errors`) are within tolerance."""

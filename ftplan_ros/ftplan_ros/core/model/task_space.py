@@ -20,6 +20,15 @@ KINDS = ('planar', 'position', 'axis', 'pose')
 TASK_DIM = {'planar': 2, 'position': 3, 'axis': 5, 'pose': 6}
 POINT_SIZE = {'planar': 2, 'position': 3, 'axis': 6, 'pose': 7}
 UNIT_TOLERANCE = 1e-3  # how far from 1 the norm of a given quaternion or axis may be
+_KIND_OF_SIZE = {size: kind for kind, size in POINT_SIZE.items()}
+
+
+def kind_of_point(x) -> str:
+    """Return the kind of a task point from its size (2, 3, 6 or 7 numbers); else ValueError."""
+    kind = _KIND_OF_SIZE.get(len(x))
+    if kind is None:
+        raise ValueError(f'a task point has 2, 3, 6 or 7 numbers, got {len(x)}')
+    return kind
 
 
 def points_from_frames(kind: str, frames: np.ndarray) -> np.ndarray:
@@ -49,8 +58,8 @@ def point_position(x: np.ndarray) -> np.ndarray:
     return x[:2] if len(x) == 2 else x[:3]
 
 
-def format_point(kind: str, x) -> str:
-    """Describe a task point in one short line (metres; orientation as given)."""
+def describe_point(kind: str, x) -> str:
+    """Describe a task point in one short line for people (3 decimals; orientation as given)."""
     values = [float(v) for v in x]
     position = '[' + ', '.join(f'{v:.3f}' for v in values[:3 if kind != 'planar' else 2]) + ']'
     if kind == 'axis':
