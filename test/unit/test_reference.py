@@ -15,7 +15,7 @@ from ftplan_ros.core import CollisionChecker, load_scene, parse_scene, plan
 from ftplan_ros.core.grid.components import components
 from ftplan_ros.core.grid.existence import (
     Existence,
-    ReferenceAnswer,
+    ExistenceAnswer,
     decide_existence,
     proves_no,
     proves_yes,
@@ -68,7 +68,7 @@ def test_the_paper_scenes_have_a_plan_and_the_reference_proves_it(name, cells):
     scene = load_scene(SCENES / f'{name}.yaml')
     answer = decide_existence(scene, cells)
     assert answer.existence is Existence.YES
-    assert isinstance(answer, ReferenceAnswer) and answer.cells == cells
+    assert isinstance(answer, ExistenceAnswer) and answer.cells == cells
     assert 0 < answer.certified_cells <= answer.liberal_cells <= cells ** 3
     assert answer.time_s > 0
     result = plan(scene)

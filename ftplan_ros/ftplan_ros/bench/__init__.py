@@ -2,6 +2,6 @@
 
 `scenes` draws random planar scenes and referees a plan by brute force; `crowded` builds
 scenes crowded next to the arm's own start and goal while a plan still exists; `recall`
-measures the planner's recall and time against the existence reference
+measures the planner's recall and time against the existence decision on a joint grid
 (core/grid/existence.py) in one run; `spatial` does the same for 7-joint arms.
 """

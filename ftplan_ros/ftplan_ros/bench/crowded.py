@@ -1,10 +1,10 @@
 """Crowded scenes for the paper's arm, built the way the paper built its Fig. 3.
 
 Start from a random task without obstacles (start 1.8-2.6 m, goal 0.9-1.5 m from the base,
-links of 1 m; drawn again until the reference proves it has a plan) and add disks one at
+links of 1 m; drawn again until the existence decision proves it has a plan) and add disks one at
 a time, each next to a link of an obstacle-free configuration of M_s or M_g (exact
 inverse kinematics), at a small gap: the arm's own poses are crowded in. A disk is kept
-only while the reference still proves that a failure-tolerant plan exists
+only while the existence decision still proves that a failure-tolerant plan exists
 (core/grid/existence.py); the scene is done after `disks` kept disks or `attempts` tries. Every
 crowded scene therefore has a plan, and most are tight.
 """
@@ -23,12 +23,12 @@ from .scenes import random_task
 LINKS = (1.0, 1.0, 1.0)
 RADII = (0.12, 0.25)   # [m] disk radii
 GAPS = (0.02, 0.10)    # [m] from the link the disk is placed next to
-TASK_DRAWS = 100       # random tasks tried for one whose plan the reference proves
+TASK_DRAWS = 100       # random tasks tried for one whose plan existence.py proves
 
 
 def crowded_scene(rng: np.random.Generator, disks: int = 12, attempts: int = 40,
                   cells: int = 128, name: str = 'crowded') -> Scene:
-    """Make a crowded scene (see the module docstring); the reference runs on `cells`^3."""
+    """Make a crowded scene (see the module docstring); existence is decided on `cells`^3."""
     start, goal = _proved_task(rng, cells, name)
     poses = np.vstack([preimage_samples(np.array(LINKS), start, 90),
                        preimage_samples(np.array(LINKS), goal, 90)])
@@ -51,8 +51,8 @@ def _proved_task(rng: np.random.Generator, cells: int, name: str) -> tuple[np.nd
         start, goal = random_task(rng)
         if decide_existence(_scene([], start, goal, name), cells).existence is Existence.YES:
             return start, goal
-    raise RuntimeError(f'no random task of {TASK_DRAWS} has a plan the reference proves on '
-                       f'{cells}^3 cells')
+    raise RuntimeError(f'no random task of {TASK_DRAWS} has a plan the existence decision '
+                       f'proves on {cells}^3 cells')
 
 
 def _disk_beside(rng: np.random.Generator, poses: np.ndarray, obstacles: list[dict],

@@ -4,18 +4,20 @@ Two groups of seeded scenes for the paper's arm: random scenes (random start and
 0-20 random disks; bench/scenes.py) and crowded scenes (disks added next to the arm's own start
 and goal poses while a plan still exists; bench/crowded.py). For each scene, in one run:
 
-* the existence reference (core/grid/existence.py) decides on an N^3 joint grid whether a
-  plan exists: YES and NO are proofs, UNSURE means the grid is too coarse;
+* the existence decision (core/grid/existence.py; "reference" in the tables) decides on
+  an N^3 joint grid whether a plan exists: YES and NO are proofs, UNSURE means the grid
+  is too coarse;
 * the planner runs cold (manifolds traced) and warm (manifolds cached), and says which
   method produced its plan (the paper's surface or recovery sheets);
-* every plan it returns is refereed: the reference must not have proved that none
-  exists, and at 9 moments of the nominal path every joint's lock must be recoverable
-  by an over-approximating flood fill of its failure plane (1 deg cells), whose "no"
-  would prove the guarantee false.
+* every plan it returns is refereed: the existence decision must not have proved that
+  none exists, and the referee (`scenes.referee_accepts`) must accept it: at 9 moments
+  of the nominal path every joint's lock must be recoverable by an over-approximating
+  flood fill of its failure plane (1 deg cells), whose "no" would prove the guarantee
+  false.
 
-Recall is the share of the reference's YES scenes the planner solves. Times are p50/p95
-within this run; the ratio is the reference's p50 over the planner's. With a grid baseline
-(`--grid-baseline N`) the exhaustive grid planner `brute_force.grid_plan` also runs on N^3
+Recall is the share of the existence decision's YES scenes the planner solves. Times are
+p50/p95 within this run; the ratio is the existence decision's p50 over the planner's.
+With the exhaustive grid baseline (`--grid-baseline N`), `exhaustive.grid_plan` also runs on N^3
 cells (180: 2 deg, the baseline the issue first measured against); it samples cell centres,
 so its answers prove nothing, and the table gives its p50 and the ratio to it besides.
 """
@@ -35,7 +37,7 @@ from ..core.grid.existence import Existence, decide_existence
 from ..core.io.fingerprint import scene_to_dict
 from ..core.model.scene import Scene
 from .crowded import crowded_scene
-from .scenes import random_scene, referee_agrees
+from .scenes import random_scene, referee_accepts
 
 GROUPS = ('random', 'crowded')
 
@@ -47,13 +49,13 @@ class RecallRun:
     group: str
     index: int
     disks: int
-    existence: str           # the reference's verdict: yes, no or unsure
-    reference_s: float
+    existence: str           # the existence decision: yes, no or unsure
+    existence_s: float
     feasible: bool
     method: str              # of the plan ('' without one)
     cold_s: float
     warm_s: float
-    refuted: bool            # a plan the reference or the referee proves wrong
+    refuted: bool            # a plan the existence decision or the referee proves wrong
     proved_infeasible: bool  # the planner itself proved that no plan exists
     reason: str
     scene: dict
@@ -93,7 +95,7 @@ def run_recall_benchmark(scenes: int, seed: int, cells: int, crowded_cells: int,
 
 def run_scene(scene: Scene, group: str, index: int, cells: int,
               grid_baseline: int = 0) -> RecallRun:
-    """Decide the scene with the reference, plan it cold and warm, referee a plan.
+    """Decide the scene's existence on the grid, plan it cold and warm, referee a plan.
 
     `grid_baseline` > 0: run the grid baseline on that many cells per joint too.
     """
@@ -108,7 +110,7 @@ def run_scene(scene: Scene, group: str, index: int, cells: int,
     refuted = False
     if result.feasible:
         checker = CollisionChecker(scene.robot, scene.obstacles)
-        refuted = answer.existence is Existence.NO or not referee_agrees(
+        refuted = answer.existence is Existence.NO or not referee_accepts(
             checker, result, np.asarray(scene.task.goal), scene.task.goal_tolerance)
     return RecallRun(group, index, len(scene.obstacles), answer.existence.value, answer.time_s,
                      result.feasible, result.stats.get('method', '') if result.feasible else '',
@@ -130,7 +132,7 @@ def summarize(runs: list[RecallRun], cells: int, grid_baseline: int = 0) -> str:
     """Tabulate recall and false guarantees, then times per group and method.
 
     With `grid_baseline` cells per joint, the grid baseline's p50 and ratio too, and its
-    answers against the reference's.
+    answers against the existence decision's.
     """
     lines = [f'reference: {cells}^3 joint grid, G from inside (YES proved) and outside '
              '(NO proved); planner cold (manifolds traced) and warm (cached)',
@@ -164,7 +166,7 @@ def summarize(runs: list[RecallRun], cells: int, grid_baseline: int = 0) -> str:
         if not rows:
             continue
         cold, warm, ref = (np.array([getattr(r, a) for r in rows]) * 1e3
-                           for a in ('cold_s', 'warm_s', 'reference_s'))
+                           for a in ('cold_s', 'warm_s', 'existence_s'))
         line = (f'{name:<28}{len(rows):>7}{_p(cold):>16}{_p(warm):>16}{_p(ref):>18}'
                 f'{_ratio(np.median(ref) / np.median(cold)):>14}')
         if grid_baseline:

@@ -1,8 +1,9 @@
 """Random scenes for the paper's arm and the referee of a plan, for the benchmarks.
 
-`random_scene` draws a random start and goal and random disks; `referee_agrees` checks a
-plan's nominal path at 9 moments for every joint with an over-approximating flood fill in
-the failure plane (1 deg cells), whose "no" would prove the plan wrong. The recall
+`random_scene` draws a random start and goal and random disks; `referee_accepts`, the
+referee of a plan, checks its nominal path at 9 moments for every joint with an
+over-approximating flood fill in the failure plane (1 deg cells,
+`exhaustive.recoverable_in_plane`), whose "no" would prove the plan wrong. The recall
 benchmark (recall.py) uses both.
 """
 
@@ -40,11 +41,12 @@ def random_scene(rng: np.random.Generator, disks: int) -> Scene:
                                  'goal': goal.round(3).tolist()}}, name='random')
 
 
-def referee_agrees(checker: CollisionChecker, result, x_goal: np.ndarray,
+def referee_accepts(checker: CollisionChecker, result, x_goal: np.ndarray,
                    goal_tolerance: float, moments: int = 9, cells: int = 360) -> bool:
     """Whether every lock at `moments` points of the nominal path may still reach x_g.
 
-    Reaching means coming within `goal_tolerance` [m], as the guarantee says.
+    Reaching means coming within `goal_tolerance` [m], as the guarantee says; False
+    proves the plan's guarantee wrong.
     """
     return all(recoverable_in_plane(checker, point_at_fraction(result.nominal_path, f), joint,
                                     x_goal, cells, goal_tolerance=goal_tolerance)

@@ -1,12 +1,14 @@
 """Exhaustive joint-space grids: the brute-force baselines the planner is checked against.
 
-* `recoverable_in_plane` (the referee): with joint i locked at θ_i, can the arm at θ reach
-  x_g? Every cell of a grid over the failure plane is judged by its centre with the
-  cell's motion bound added, so it counts as *possibly free* when some configuration in
-  it might be collision-free, and as *possibly a goal* when some configuration in it
-  might reach x_g; cells touching at a face, edge or corner are neighbours. The flood
-  fill over-approximates, so its "no" proves that the arm cannot recover.
-* `grid_plan` (the baseline): the exhaustive grid planner for the whole problem.
+* `recoverable_in_plane`: with joint i locked at θ_i, can the arm at θ reach x_g? Every
+  cell of a grid over the failure plane is judged by its centre with the cell's motion
+  bound added, so it counts as *possibly free* when some configuration in it might be
+  collision-free, and as *possibly a goal* when some configuration in it might reach
+  x_g; cells touching at a face, edge or corner are neighbours. The flood fill
+  over-approximates, so its "no" proves that the arm cannot recover: the referee of a
+  plan (bench/scenes.referee_accepts) and the tests ask it.
+* `grid_plan` (the exhaustive grid baseline): the grid planner for the whole problem; it
+  samples cell centres, so its answers prove nothing.
 """
 
 from __future__ import annotations

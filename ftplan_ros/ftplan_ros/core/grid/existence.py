@@ -41,8 +41,8 @@ class Existence(enum.Enum):
 
 
 @dataclass(frozen=True)
-class ReferenceAnswer:
-    """The reference's verdict on one scene, with its grid and the time it took [s]."""
+class ExistenceAnswer:
+    """The existence decision on one scene, with its grid and the time it took [s]."""
 
     existence: Existence
     cells: int
@@ -51,15 +51,15 @@ class ReferenceAnswer:
     time_s: float
 
 
-def decide_existence(scene: Scene, cells: int = 256) -> ReferenceAnswer:
+def decide_existence(scene: Scene, cells: int = 256) -> ExistenceAnswer:
     """Decide on N = `cells` cells per joint whether the scene's task has a plan."""
     if not supports(scene):
-        raise ValueError('the reference handles planar 3R arms among disks only')
+        raise ValueError('the existence decision handles planar 3R arms among disks only')
     started = time.perf_counter()
     grid = tolerant_set(scene, cells)
     existence = Existence.YES if proves_yes(grid) else \
         Existence.NO if proves_no(grid) else Existence.UNSURE
-    return ReferenceAnswer(existence, cells, int(grid.certified_all.sum()),
+    return ExistenceAnswer(existence, cells, int(grid.certified_all.sum()),
                            int(grid.liberal_all.sum()), time.perf_counter() - started)
 
 

@@ -24,8 +24,8 @@ a layer, the free part of every failure plane {θ_i = v}, v in the slab, is
   half a sub-slab moves the tool by at most R_i · (sub-slab) / 2 <= the goal tolerance
   (`escape_certified`: an under-approximation of G_i).
 
-Angles [rad], lengths [m]. The grid is the reference that decides whether a plan exists
-(core/grid/existence.py) and the guide of the grid planner (recovery_sheets.py).
+Angles [rad], lengths [m]. On the grid, existence.py decides whether a plan exists and
+the recovery sheets (recovery_sheets.py) find one.
 """
 
 from __future__ import annotations
