@@ -146,7 +146,7 @@ def test_joint_space_figure_draws_manifolds_theta_s_hits_and_the_surface(scene, 
     assert any(np.isnan(np.column_stack(line.get_data_3d())).any()
                for line in artists(ax, 'M_g')), 'M_g of fig3a crosses the seam'
     candidates = np.column_stack(only(ax, 'Theta_S').get_data_3d())
-    assert len(candidates) == len(result.theta_S)
+    assert len(candidates) == len(result.necessary_starts)
     # C-space obstacles: every drawn cell centre collides.
     cells = np.radians(np.column_stack(only(ax, 'C_obs').get_data_3d()))
     assert len(cells) > 100

@@ -54,8 +54,8 @@ def draw_joint_space(ax: Axes, scene: Scene, result: PlanResult, grid_cells: int
                 points = np.vstack([points, points[:1] + branch.period[:3]])
             ax.plot(*_wrapped_polyline(np.degrees(points), periodic).T, '--', color=colour,
                     lw=1.3, gid=gid, label=label if k == 0 else '_nolegend_')
-    if result.theta_S is not None and len(result.theta_S):
-        candidates = _wrap_degrees(np.degrees(result.theta_S[:, :3]), periodic)
+    if result.necessary_starts is not None and len(result.necessary_starts):
+        candidates = _wrap_degrees(np.degrees(result.necessary_starts[:, :3]), periodic)
         ax.plot(*candidates.T, '.', ms=3.0, color=START_COLOUR, alpha=0.6, gid='Theta_S',
                 label=r'$\Theta_s$ candidates')
     surface = result.surface

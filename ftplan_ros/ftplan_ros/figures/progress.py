@@ -132,8 +132,8 @@ def _draw_manifolds(axes: list[Axes], robot: Robot, result: PlanResult) -> None:
                 ax.plot(np.full(len(points), x), points[:, j], '_', ms=_STRIP_WIDTH * 1.6,
                         color=colour, alpha=0.5, zorder=2, gid=gid,
                         label=_label(j == 0 and k == 0, label))
-    if result.theta_S is not None and len(result.theta_S):
-        candidates = np.degrees(wrap_configuration(result.theta_S, periodic))
+    if result.necessary_starts is not None and len(result.necessary_starts):
+        candidates = np.degrees(wrap_configuration(result.necessary_starts, periodic))
         for j, ax in enumerate(axes):
             ax.plot(np.zeros(len(candidates)), candidates[:, j], '.', ms=4, color='k',
                     zorder=3, gid='Theta_S', label=_label(j == 0, r'$\Theta_s$ candidates'))

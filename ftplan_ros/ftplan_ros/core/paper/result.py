@@ -33,7 +33,8 @@ class PlanResult:
     # What the planner saw, for figures and diagnostics:
     start_manifolds: tuple[SelfMotionManifold, ...] = ()
     goal_manifolds: tuple[SelfMotionManifold, ...] = ()
-    theta_S: np.ndarray | None = None  # Θ_s: (c, n) candidates passing eq. 6 (paper Step 3)
+    # Θ_s (paper Step 3): (c, n) start candidates meeting the necessary condition, eq. 6
+    necessary_starts: np.ndarray | None = None
     proposed_starts: np.ndarray | None = None  # (p, n) of Θ_s with a vertex-free coarse S_F
     periodic: np.ndarray | None = None
 

@@ -280,7 +280,8 @@ def _lift(scene: Scene, reduced: FrozenJoints, attempt: PlanResult, curve: dict,
                  tolerated_joints=[robot.joint_names[j] for j in scene.tolerated_joints])
     lifted = dict(start_manifolds=_lift_manifolds(reduced, attempt.start_manifolds),
                   goal_manifolds=_lift_manifolds(reduced, attempt.goal_manifolds),
-                  theta_S=None if attempt.theta_S is None else reduced.expand(attempt.theta_S),
+                  necessary_starts=None if attempt.necessary_starts is None
+                  else reduced.expand(attempt.necessary_starts),
                   proposed_starts=None if attempt.proposed_starts is None
                   else reduced.expand(attempt.proposed_starts), periodic=robot.periodic)
     if not attempt.feasible:

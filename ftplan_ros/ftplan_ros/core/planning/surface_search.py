@@ -61,7 +61,7 @@ class _Search:
     surface: FailureSurface | None
     reason: str
     stats: dict = field(default_factory=dict)
-    theta_S: np.ndarray | None = None
+    necessary_starts: np.ndarray | None = None
     proposed: np.ndarray | None = None
 
 
@@ -150,7 +150,7 @@ class SurfaceSearch:
         stats['collision_checks'] = self.checker.checks
         stats['tolerated_joints'] = [self.robot.joint_names[i] for i in self.joints]
         return PlanResult(search.surface is not None, self.robot.joint_names, search.reason,
-                          search.surface, stats, M_s, M_g, search.theta_S, search.proposed,
+                          search.surface, stats, M_s, M_g, search.necessary_starts, search.proposed,
                           self.robot.periodic)
 
     def manifolds(self) -> tuple[tuple[SelfMotionManifold, ...], tuple[SelfMotionManifold, ...]]:
@@ -197,34 +197,34 @@ class SurfaceSearch:
         # Step 3: the necessary condition, on M_g^F as a whole (the paper's Θ_s) and per arc.
         per_arc = np.stack([necessary_condition(self.robot, candidates, points, self.joints)
                             for points in arc_points])  # (arcs, C, J)
-        theta_S = candidates[per_arc.any(axis=0).all(axis=1)]
+        necessary_starts = candidates[per_arc.any(axis=0).all(axis=1)]
         single_arc = per_arc.all(axis=2)  # (arcs, C)
-        stats: dict = {'theta_S': len(theta_S)}
-        if len(theta_S) == 0:
+        stats: dict = {'theta_S': len(necessary_starts)}
+        if len(necessary_starts) == 0:
             options = self._blocking_joints(per_arc.any(axis=0))
             stats['blocked_joints'] = [[self.robot.joint_names[j] for j in joints]
                                        for joints in options]
             everywhere = not per_arc.any(axis=(0, 1))[self.joints.index(options[0][0])]
-            return _Search(None, self._necessary_condition_reason(options, everywhere,
-                                                                  arc_points), stats, theta_S)
+            reason = self._necessary_condition_reason(options, everywhere, arc_points)
+            return _Search(None, reason, stats, necessary_starts)
         if not single_arc.any():
             return _Search(None, 'the failure planes of every θ_s meet M_g^F only on '
                            'different obstacle-free arcs: no failure surface can join them',
-                           stats, theta_S)
+                           stats, necessary_starts)
 
         # Steps 4-6: failure surfaces, ranked by the clearance at their vertices.
-        self.report(f'{len(theta_S)} start configurations pass the necessary condition; '
+        self.report(f'{len(necessary_starts)} start configurations pass the necessary condition; '
                     'building failure surfaces')
         ranking = self._rank_proposals(candidates, arc_points, arc_laps, single_arc)
         proposed = candidates[np.unique(ranking.candidates)]
         stats['surfaces_proposed'] = len(ranking.scores)
         if not len(ranking.scores):
             return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
-                           'at one of its vertices', stats, theta_S, proposed)
-        return self._verify_best(candidates, arc_points, ranking, stats, theta_S, proposed)
+                           'at one of its vertices', stats, necessary_starts, proposed)
+        return self._verify_best(candidates, arc_points, ranking, stats, necessary_starts, proposed)
 
     def _verify_best(self, candidates: np.ndarray, arc_points: list[np.ndarray],
-                     ranking: _Ranking, stats: dict, theta_S: np.ndarray,
+                     ranking: _Ranking, stats: dict, necessary_starts: np.ndarray,
                      proposed: np.ndarray) -> _Search:
         """Self-check, best-ranked first: the first surface that passes wins."""
         last_reason = ''
@@ -249,7 +249,7 @@ class SurfaceSearch:
                              goal_error_bound_m=verdict.max_goal_error,
                              orientation_error_bound_rad=verdict.max_orientation_error,
                              clearance_samples=verdict.clearance_samples)
-                return _Search(surface, '', stats, theta_S, proposed)
+                return _Search(surface, '', stats, necessary_starts, proposed)
             last_reason = verdict.reason
             log.debug('surface rejected: %s', verdict.reason)
         stats['surfaces_tried'] = tried
@@ -257,9 +257,9 @@ class SurfaceSearch:
             return _Search(None, f'none of the {len(ranked)} best failure surfaces proposed '
                            'reached the self-check: at full resolution each web hits an '
                            'obstacle at a vertex or misses the failure plane of a joint',
-                           stats, theta_S, proposed)
+                           stats, necessary_starts, proposed)
         return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
-                       f'{last_reason}', stats, theta_S, proposed)
+                       f'{last_reason}', stats, necessary_starts, proposed)
 
     def _blocking_joints(self, passing: np.ndarray) -> list[list[int]]:
         """Find the sets of joints whose failure planes keep the candidates from eq. 6.
