@@ -114,7 +114,7 @@ def run_scene(scene: Scene, group: str, index: int, cells: int,
             checker, result, np.asarray(scene.task.goal), scene.task.goal_tolerance)
     return RecallRun(group, index, len(scene.obstacles), answer.existence.value, answer.time_s,
                      result.feasible, result.stats.get('method', '') if result.feasible else '',
-                     cold, warm, refuted, bool(result.stats.get('proved_infeasible', False)),
+                     cold, warm, refuted, result.proved_infeasible,
                      result.reason, scene_to_dict(scene), *_grid_baseline(scene, grid_baseline))
 
 

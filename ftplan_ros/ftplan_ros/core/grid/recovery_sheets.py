@@ -93,7 +93,7 @@ def past_the_paper(scene: Scene, result: PlanResult, options: PlannerOptions,
     # quarter step apart along M_s: no plan has room to start, unless between those
     # starts. No web is searched; the sheets' grids try to prove that none exists, unless
     # the question was one given start (it fails the condition: that is all).
-    no_room = result.stats.get('theta_S', 1) == 0 and result.stats.get('start_candidates', 0) > 0
+    no_room = result.necessary_starts is not None and len(result.necessary_starts) == 0
     if no_room and start_configuration is not None:
         return result
     sheets = RecoverySheets(scene, options, report, start_configuration, prefer_starts, checker)
@@ -116,9 +116,9 @@ def with_sheets(paper: PlanResult, sheets: PlanResult) -> PlanResult:
                                                      'paper_plan_stats': paper.stats})
     stats = paper.stats | {f'sheets_{key}': value for key, value in sheets.stats.items()
                            if key not in ('method', 'tolerated_joints')}
-    stats['proved_infeasible'] = bool(sheets.stats.get('proved_infeasible', False))
+    stats['proved_infeasible'] = sheets.proved_infeasible
     return replace(paper, stats=stats, reason=f'{sheets.reason}; the paper\'s surface: '
-                   f'{paper.reason}')
+                   f'{paper.reason}', proved_infeasible=sheets.proved_infeasible)
 
 
 def sheets_apply(scene: Scene, options: PlannerOptions) -> bool:
@@ -180,7 +180,8 @@ class RecoverySheets:
                 continue
             if proves_no(grid):
                 stats['proved_infeasible'] = True
-                return self._result(False, self._proved(where), None, stats, previous)
+                return self._result(False, self._proved(where), None, stats, previous,
+                                    proved_infeasible=True)
         return self._result(False, 'no failure-tolerant plan found within the resolution of '
                             f'the joint grid ({reason})', None, stats, previous)
 
@@ -188,8 +189,8 @@ class RecoverySheets:
         """Try to prove that no plan exists, on the grids `run` takes, without searching webs.
 
         For scenes where a plan is unlikely (no start passes the paper's necessary
-        condition). The result is never feasible; stats['proved_infeasible'] says whether
-        a grid proved it.
+        condition). The result is never feasible; its `proved_infeasible` says whether a
+        grid proved it.
         """
         stats: dict = {'method': METHOD}
         tried = _NO_GRID
@@ -198,7 +199,8 @@ class RecoverySheets:
             stats.update(grid_cells=grid.lattice.cells, classified_cells=cells)
             if proves_no(grid):
                 stats['proved_infeasible'] = True
-                return self._result(False, self._proved(where), None, stats, previous)
+                return self._result(False, self._proved(where), None, stats, previous,
+                                    proved_infeasible=True)
             tried = f'the finest grid tried: {where}'
         return self._result(False, f'no failure-tolerant plan found (not proved that none '
                             f'exists; {tried})', None, stats, previous)
@@ -225,13 +227,14 @@ class RecoverySheets:
             f', for a clearance above the margin of {self.margin:g} m' if self.margin > 0 else '')
 
     def _result(self, feasible: bool, reason: str, surface: FailureSurface | None,
-                stats: dict, previous: PlanResult | None) -> PlanResult:
+                stats: dict, previous: PlanResult | None,
+                proved_infeasible: bool = False) -> PlanResult:
         robot = self.scene.robot
         stats['collision_checks'] = self.checker.checks
         stats['tolerated_joints'] = [robot.joint_names[i] for i in self.scene.tolerated_joints]
         manifolds = (previous.start_manifolds, previous.goal_manifolds) if previous else ((), ())
         return PlanResult(feasible, robot.joint_names, reason, surface, stats, *manifolds,
-                          periodic=robot.periodic)
+                          periodic=robot.periodic, proved_infeasible=proved_infeasible)
 
     def _plan_on(self, grid: TolerantSet) -> tuple[FailureSurface | None, str]:
         """Build the web on one grid, or say why not."""

@@ -23,6 +23,9 @@ class PlanResult:
     tolerated joints are `surface.tolerated`, by name in stats). Angles are radians;
     `theta_s` and the hits are wrapped to (-π, π] on periodic joints, while the paths
     are continuous (they may leave (-π, π] so as not to jump).
+
+    `stats` reports (it is the plan JSON's "stats"); what the planner's later stages
+    decide on is in the typed fields after `periodic`.
     """
 
     feasible: bool
@@ -37,6 +40,12 @@ class PlanResult:
     necessary_starts: np.ndarray | None = None
     proposed_starts: np.ndarray | None = None  # (p, n) of Θ_s with a vertex-free coarse S_F
     periodic: np.ndarray | None = None
+    # What the stages after the paper's search decide on:
+    goal_free_arcs: int = 0           # obstacle-free arcs of M_g the paper's search had
+    # Sets of joints whose failure planes keep the starts from eq. 6, likeliest first:
+    blocked_joints: tuple[tuple[str, ...], ...] = ()
+    start_preferred: bool = False     # θ_s is one of the starts the caller preferred
+    proved_infeasible: bool = False   # a joint grid proved that no plan exists
 
     @property
     def theta_s(self) -> np.ndarray | None:

@@ -460,7 +460,7 @@ def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None
     if arcs:
         second = plan(scene, options, rng, progress, cache=cache,
                       prefer_starts=planner.prefer_reachable(np.vstack(arcs)))
-        if second.feasible and second.stats.get('start_preferred'):
+        if second.feasible and second.start_preferred:
             again = planner.approach(q, second.theta_s, arc=arc)
             if again.ok:
                 return ReachablePlan(second, again)

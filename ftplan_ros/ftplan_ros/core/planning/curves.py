@@ -283,7 +283,8 @@ def _lift(scene: Scene, reduced: FrozenJoints, attempt: PlanResult, curve: dict,
                   necessary_starts=None if attempt.necessary_starts is None
                   else reduced.expand(attempt.necessary_starts),
                   proposed_starts=None if attempt.proposed_starts is None
-                  else reduced.expand(attempt.proposed_starts), periodic=robot.periodic)
+                  else reduced.expand(attempt.proposed_starts), periodic=robot.periodic,
+                  goal_free_arcs=attempt.goal_free_arcs, blocked_joints=attempt.blocked_joints)
     if not attempt.feasible:
         return PlanResult(False, robot.joint_names, attempt.reason, None, stats, **lifted)
     surface = _lift_surface(reduced, attempt.surface, scene.tolerated_joints)

@@ -97,8 +97,7 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
     checker = CollisionChecker(scene.robot, scene.obstacles)  # one for every stage
     check_plannable(scene, checker)
     if scene.robot.n_joints - scene.robot.task_dim == 1:
-        search = SurfaceSearch(scene, options, rng, report, cache, checker)
-        search.prefer_starts = prefer_starts  # issue 10: reachable starts first
+        search = SurfaceSearch(scene, options, rng, report, cache, checker, prefer_starts)
         result = _paper_then_sheets(search, scene, options, report, start_configuration,
                                     prefer_starts)
         if not result.feasible and start_configuration is None:
@@ -130,14 +129,14 @@ def _paper_then_sheets(search: SurfaceSearch, scene: Scene, options: PlannerOpti
                               start_configuration, prefer_starts, checker)
     finer = (options.candidate_refinement,)
     first = search.run(subdivisions=(1,))
-    if first.feasible or not first.stats['goal_free_arcs']:  # no second round, as before
+    if first.feasible or not first.goal_free_arcs:  # no second round, as before
         return past_the_paper(scene, first, options, report, None, prefer_starts, checker)
-    if not first.stats.get('theta_S'):
+    if first.necessary_starts is None or len(first.necessary_starts) == 0:
         return past_the_paper(scene, search.run(subdivisions=finer), options, report, None,
                               prefer_starts, checker)
     sheets = RecoverySheets(scene, options, report, None, prefer_starts,
-                       checker).run(previous=first)
-    if sheets.feasible or sheets.stats.get('proved_infeasible'):
+                            checker).run(previous=first)
+    if sheets.feasible or sheets.proved_infeasible:
         return with_sheets(first, sheets)
     return with_sheets(search.run(subdivisions=finer), sheets)
 
@@ -149,12 +148,12 @@ def _with_coverage(scene: Scene, result: PlanResult, options: PlannerOptions,
     """Add to a failed result the largest set of joints a plan could still tolerate.
 
     When some joints' failure planes keep every start from the necessary condition
-    (stats['blocked_joints'], likeliest set first), the others are planned for, set by
+    (`result.blocked_joints`, likeliest set first), the others are planned for, set by
     set, up to `attempts` sets; the first that plans is reported as `coverable_joints`.
     """
     requested = [scene.robot.joint_names[i] for i in scene.tolerated_joints]
     reason = ''
-    for blocked in (result.stats.get('blocked_joints') or [])[:attempts]:
+    for blocked in result.blocked_joints[:attempts]:
         others = [name for name in requested if name not in blocked]
         if not others:
             continue

@@ -63,6 +63,8 @@ class _Search:
     stats: dict = field(default_factory=dict)
     necessary_starts: np.ndarray | None = None
     proposed: np.ndarray | None = None
+    blocked_joints: tuple[tuple[str, ...], ...] = ()  # as PlanResult's
+    start_preferred: bool = False
 
 
 @dataclass(frozen=True)
@@ -99,12 +101,16 @@ class SurfaceSearch:
 
     `scene.tolerated_joints` are the joints whose locks the surface is built for; the
     others may block the way to the goal when they lock. A `checker` for the scene's
-    robot and obstacles may be passed in to share it.
+    robot and obstacles may be passed in to share it. `prefer_starts` maps start
+    candidates (c, n) to a mask (c,) of those to search first (issue 10: approach.py's
+    starts reachable from the arm along M_s^F); all of them are searched only when none
+    of those plans.
     """
 
     def __init__(self, scene: Scene, options: PlannerOptions, rng: np.random.Generator,
                  report: Callable[[str], None], cache: ManifoldCache,
-                 checker: CollisionChecker | None = None):
+                 checker: CollisionChecker | None = None,
+                 prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None):
         self.scene = scene
         self.robot = scene.robot
         self.task = scene.task
@@ -115,6 +121,7 @@ class SurfaceSearch:
         self.joints = scene.tolerated_joints
         self.margin = options.verification.margin
         self.checker = checker or CollisionChecker(self.robot, scene.obstacles)
+        self.prefer_starts = prefer_starts
         self.x_s = np.asarray(self.task.start, dtype=float)
         self.x_g = np.asarray(self.task.goal, dtype=float)
 
@@ -136,6 +143,7 @@ class SurfaceSearch:
         # (a narrow band of good starts).
         refinements = [None] if start_configuration is not None else \
             list(subdivisions or (1, self.options.candidate_refinement))
+        blocked: tuple[tuple[str, ...], ...] = ()
         for subdivisions in refinements:
             if subdivisions is None:
                 candidates = self._given_start(start_configuration)
@@ -144,6 +152,9 @@ class SurfaceSearch:
             search = self._search_preferred(candidates, arc_points, arc_laps)
             stats.update(search.stats, start_candidates=len(candidates),
                          candidate_subdivisions=subdivisions or 1)
+            # A round whose starts pass eq. 6 keeps the joints that blocked the one before
+            # (as stats does).
+            blocked = search.blocked_joints or blocked
             if search.surface is not None or not arcs:
                 break
             self.report(f'no plan from {len(candidates)} starts; trying starts between them')
@@ -151,7 +162,8 @@ class SurfaceSearch:
         stats['tolerated_joints'] = [self.robot.joint_names[i] for i in self.joints]
         return PlanResult(search.surface is not None, self.robot.joint_names, search.reason,
                           search.surface, stats, M_s, M_g, search.necessary_starts, search.proposed,
-                          self.robot.periodic)
+                          self.robot.periodic, goal_free_arcs=len(arcs), blocked_joints=blocked,
+                          start_preferred=search.start_preferred)
 
     def manifolds(self) -> tuple[tuple[SelfMotionManifold, ...], tuple[SelfMotionManifold, ...]]:
         """Trace M_s and M_g with the clearance of their points (Steps 1-2)."""
@@ -166,10 +178,6 @@ class SurfaceSearch:
                                    for b in branches))
         return manifolds[0], manifolds[1]
 
-    # Issue 10: starts the caller prefers (approach.py: reachable from the arm along
-    # M_s^F) are searched first; all the candidates only when none of those plans.
-    prefer_starts: Callable[[np.ndarray], np.ndarray] | None = None
-
     def _search_preferred(self, candidates: np.ndarray, arc_points: list[np.ndarray],
                           arc_laps: list[int]) -> _Search:
         """Run `_search` on the candidates `prefer_starts` marks, then on all of them."""
@@ -178,7 +186,7 @@ class SurfaceSearch:
             search = self._search(preferred, arc_points, arc_laps) if len(preferred) else None
             if search is not None and search.surface is not None:
                 return replace(search, stats=dict(search.stats, preferred_starts=len(preferred),
-                                                  start_preferred=True))
+                                                  start_preferred=True), start_preferred=True)
         search = self._search(candidates, arc_points, arc_laps)
         if self.prefer_starts is not None:
             search = replace(search, stats=dict(search.stats, start_preferred=False))
@@ -201,12 +209,14 @@ class SurfaceSearch:
         single_arc = per_arc.all(axis=2)  # (arcs, C)
         stats: dict = {'theta_S': len(necessary_starts)}
         if len(necessary_starts) == 0:
-            options = self._blocking_joints(per_arc.any(axis=0))
-            stats['blocked_joints'] = [[self.robot.joint_names[j] for j in joints]
-                                       for joints in options]
+            options = _blocking_joints(per_arc.any(axis=0), self.joints)
+            blocked = tuple(tuple(self.robot.joint_names[j] for j in joints)
+                            for joints in options)
+            stats['blocked_joints'] = [list(names) for names in blocked]
             everywhere = not per_arc.any(axis=(0, 1))[self.joints.index(options[0][0])]
-            reason = self._necessary_condition_reason(options, everywhere, arc_points)
-            return _Search(None, reason, stats, necessary_starts)
+            reason = _necessary_condition_reason(self.robot.joint_names, options, everywhere,
+                                                 arc_points)
+            return _Search(None, reason, stats, necessary_starts, blocked_joints=blocked)
         if not single_arc.any():
             return _Search(None, 'the failure planes of every θ_s meet M_g^F only on '
                            'different obstacle-free arcs: no failure surface can join them',
@@ -260,47 +270,6 @@ class SurfaceSearch:
                            stats, necessary_starts, proposed)
         return _Search(None, f'check failed for all {tried} failure surfaces tried; the last: '
                        f'{last_reason}', stats, necessary_starts, proposed)
-
-    def _blocking_joints(self, passing: np.ndarray) -> list[list[int]]:
-        """Find the sets of joints whose failure planes keep the candidates from eq. 6.
-
-        `passing` (C, J) says which tolerated joint's plane meets M_g^F from which
-        candidate. Joints that no candidate passes block every plan: they are the one
-        set. Otherwise the sets missed by the candidates that miss the fewest joints are
-        the options, the most common first (`plan` tries the others' plans in turn).
-        """
-        never = [j for k, j in enumerate(self.joints) if not passing[:, k].any()]
-        if never:
-            return [never]
-        misses = ~passing
-        count = misses.sum(axis=1)
-        sets, counts = np.unique(misses[count == count.min()], axis=0, return_counts=True)
-        return [[j for k, j in enumerate(self.joints) if row[k]]
-                for row in sets[np.argsort(-counts, kind='stable')]]
-
-    def _necessary_condition_reason(self, options: list[list[int]], everywhere: bool,
-                                    arc_points: list[np.ndarray]) -> str:
-        """Say which joints' failure planes miss M_g^F, and why when a joint never moves.
-
-        `everywhere`: the first option's joints miss from every start (else each start
-        misses some joint, the nearest ones one of the options).
-        """
-        names = self.robot.joint_names
-        if everywhere:
-            reason = ('no candidate θ_s passes the necessary condition: the failure plane of '
-                      f'{", ".join(names[j] for j in options[0])} misses M_g^F from every start')
-        else:
-            sets = ' or '.join(', '.join(names[j] for j in joints) for joints in options[:3])
-            reason = ('no candidate θ_s passes the necessary condition for every joint at '
-                      f'once: the starts nearest to it miss the failure planes of {sets}')
-        for j in options[0] if everywhere else ():
-            if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
-                angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
-                reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
-                           f'self-motion ({", ".join(map(str, angles))} rad: a spherical '
-                           'shoulder and wrist fix the elbow for a pose): locked at any other '
-                           'angle it can never reach the goal')
-        return reason
 
     def _given_start(self, theta: np.ndarray) -> np.ndarray:
         """Move the given start onto M_s: a (1, n) candidate, or (0, n) if it collides."""
@@ -398,6 +367,48 @@ class SurfaceSearch:
         lengths = np.linalg.norm(surface.goal_points - theta_s, axis=1)
         nominal = int(np.lexsort((lengths, -clearance.min(axis=1)))[0])
         return replace(surface, nominal=nominal)
+
+
+def _blocking_joints(passing: np.ndarray, joints: tuple[int, ...]) -> list[list[int]]:
+    """Find the sets of joints whose failure planes keep the candidates from eq. 6.
+
+    `passing` (C, J) says from which candidate the failure plane of which tolerated joint
+    (`joints`, J) meets M_g^F. Joints that no candidate passes block every plan: they are
+    the one set. Otherwise the sets missed by the candidates that miss the fewest joints
+    are the options, the most common first (`plan` tries the others' plans in turn).
+    """
+    never = [j for k, j in enumerate(joints) if not passing[:, k].any()]
+    if never:
+        return [never]
+    misses = ~passing
+    count = misses.sum(axis=1)
+    sets, counts = np.unique(misses[count == count.min()], axis=0, return_counts=True)
+    return [[j for k, j in enumerate(joints) if row[k]]
+            for row in sets[np.argsort(-counts, kind='stable')]]
+
+
+def _necessary_condition_reason(names: tuple[str, ...], options: list[list[int]],
+                                everywhere: bool, arc_points: list[np.ndarray]) -> str:
+    """Say which joints' failure planes miss M_g^F, and why when a joint never moves.
+
+    `everywhere`: the first option's joints miss from every start (else each start
+    misses some joint, the nearest ones one of the options).
+    """
+    if everywhere:
+        reason = ('no candidate θ_s passes the necessary condition: the failure plane of '
+                  f'{", ".join(names[j] for j in options[0])} misses M_g^F from every start')
+    else:
+        sets = ' or '.join(', '.join(names[j] for j in joints) for joints in options[:3])
+        reason = ('no candidate θ_s passes the necessary condition for every joint at '
+                  f'once: the starts nearest to it miss the failure planes of {sets}')
+    for j in options[0] if everywhere else ():
+        if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
+            angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
+            reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
+                       f'self-motion ({", ".join(map(str, angles))} rad: a spherical '
+                       'shoulder and wrist fix the elbow for a pose): locked at any other '
+                       'angle it can never reach the goal')
+    return reason
 
 
 def _within_limits(robot, thetas: np.ndarray) -> np.ndarray:
