@@ -16,6 +16,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from ..core.collision.checker import CollisionChecker
 from ..core.model.robot import PlanarChain
 from ..core.model.scene import Obstacle, Scene
+from ..core.paper.failure_surface import FailureSurface
 from ..core.paper.result import PlanResult
 from .planar import screening_spheres
 from .style import (
@@ -38,13 +39,29 @@ def draw_joint_space(ax: Axes, scene: Scene, result: PlanResult, grid_cells: int
                          f'{robot.n_joints}')
     if grid_cells < 0:
         raise ValueError(f'grid_cells must be >= 0, got {grid_cells}')
-    periodic = robot.periodic[:3]
     lower, upper = np.degrees(robot.limits[:3]).T
     extra: list[Patch] = []
     if grid_cells and scene.obstacles:
         cells = np.degrees(_c_space_obstacle_cells(robot, scene.obstacles, grid_cells))
         ax.plot(*cells.T, '.', ms=1.5, color='0.45', alpha=0.12, gid='C_obs',
                 label=f'C-space obstacles ({grid_cells}³ grid)')
+    _draw_manifolds(ax, result, robot.periodic[:3])
+    surface = result.surface
+    if result.feasible and surface is not None:
+        paths = np.degrees(surface.paths[..., :3])
+        extra.append(_draw_surface(ax, surface, paths))
+        lower = np.minimum(lower, paths.min(axis=(0, 1)))
+        upper = np.maximum(upper, paths.max(axis=(0, 1)))
+        title = (r'Joint space: $\mathcal{M}_s$, $\mathcal{M}_g$ dashed;'
+                 '\n' + rf'$\theta_s$ = {degrees_text(surface.theta_s)} and $\mathcal{{S}}_F$')
+    else:
+        title = (r'Joint space: $\mathcal{M}_s$, $\mathcal{M}_g$ dashed;' '\n'
+                 r'no failure surface $\mathcal{S}_F$')
+    _finish_axes(ax, robot.joint_names, lower, upper, title, extra)
+
+
+def _draw_manifolds(ax: Axes, result: PlanResult, periodic: np.ndarray) -> None:
+    """Draw M_s and M_g dashed and the Θ_s candidates as dots, in degrees (first 3 joints)."""
     for gid, branches, colour, label in (
             ('M_s', result.start_manifolds, START_COLOUR, r'$\mathcal{M}_s$ ($\mathbf{x}_s$)'),
             ('M_g', result.goal_manifolds, GOAL_COLOUR, r'$\mathcal{M}_g$ ($\mathbf{x}_g$)')):
@@ -58,37 +75,39 @@ def draw_joint_space(ax: Axes, scene: Scene, result: PlanResult, grid_cells: int
         candidates = _wrap_degrees(np.degrees(result.necessary_starts[:, :3]), periodic)
         ax.plot(*candidates.T, '.', ms=3.0, color=START_COLOUR, alpha=0.6, gid='Theta_S',
                 label=r'$\Theta_s$ candidates')
-    surface = result.surface
-    if result.feasible and surface is not None:
-        paths = np.degrees(surface.paths[..., :3])
-        triangles = paths.reshape(-1, 3)[surface.triangles]
-        ax.add_collection3d(Poly3DCollection(triangles, facecolor=SURFACE_COLOUR, alpha=0.3,
-                                             edgecolor='none', gid='S_F'))
-        extra.append(Patch(facecolor=SURFACE_COLOUR, edgecolor=SURFACE_EDGE, alpha=0.6,
-                           label=r'$\mathcal{S}_F$'))
-        ax.plot(*_web_lines(paths).T, '-', color=SURFACE_EDGE, lw=0.5, alpha=0.5,
-                gid='S_F:web', label='_nolegend_')
-        boundary = np.vstack([paths[0], paths[1:, -1], paths[-1, ::-1]])
-        ax.plot(*boundary.T, '-', color=SURFACE_EDGE, lw=1.6, gid='S_F:boundary',
+
+
+def _draw_surface(ax: Axes, surface: FailureSurface, paths: np.ndarray) -> Patch:
+    """Draw S_F, given as its paths (p, k, 3) in degrees, with its nominal and hit paths.
+
+    Returns the legend's patch for S_F.
+    """
+    triangles = paths.reshape(-1, 3)[surface.triangles]
+    ax.add_collection3d(Poly3DCollection(triangles, facecolor=SURFACE_COLOUR, alpha=0.3,
+                                         edgecolor='none', gid='S_F'))
+    ax.plot(*_web_lines(paths).T, '-', color=SURFACE_EDGE, lw=0.5, alpha=0.5,
+            gid='S_F:web', label='_nolegend_')
+    boundary = np.vstack([paths[0], paths[1:, -1], paths[-1, ::-1]])
+    ax.plot(*boundary.T, '-', color=SURFACE_EDGE, lw=1.6, gid='S_F:boundary',
+            label='_nolegend_')
+    ax.plot(*paths[surface.nominal].T, '-', color='k', lw=2.6, gid='nominal',
+            label='nominal path')
+    for i, path in enumerate(surface.hit_paths):
+        ax.plot(*paths[path].T, '-', color=hit_colour(i), lw=1.8, gid=f'H{i + 1}:path',
                 label='_nolegend_')
-        ax.plot(*paths[surface.nominal].T, '-', color='k', lw=2.6, gid='nominal',
-                label='nominal path')
-        for i, path in enumerate(surface.hit_paths):
-            ax.plot(*paths[path].T, '-', color=hit_colour(i), lw=1.8, gid=f'H{i + 1}:path',
-                    label='_nolegend_')
-            ax.plot(*paths[path, -1:].T, 'o', ms=8, color=hit_colour(i), mec='k',
-                    gid=f'hit:H{i + 1}', label=f'H{i + 1} hit')
-        ax.plot(*paths[0, :1].T, '*', ms=18, color='k', mec='white', gid='theta_s',
-                label=r'$\theta_s$')
-        lower = np.minimum(lower, paths.min(axis=(0, 1)))
-        upper = np.maximum(upper, paths.max(axis=(0, 1)))
-        title = (r'Joint space: $\mathcal{M}_s$, $\mathcal{M}_g$ dashed;'
-                 '\n' + rf'$\theta_s$ = {degrees_text(surface.theta_s)} and $\mathcal{{S}}_F$')
-    else:
-        title = (r'Joint space: $\mathcal{M}_s$, $\mathcal{M}_g$ dashed;' '\n'
-                 r'no failure surface $\mathcal{S}_F$')
+        ax.plot(*paths[path, -1:].T, 'o', ms=8, color=hit_colour(i), mec='k',
+                gid=f'hit:H{i + 1}', label=f'H{i + 1} hit')
+    ax.plot(*paths[0, :1].T, '*', ms=18, color='k', mec='white', gid='theta_s',
+            label=r'$\theta_s$')
+    return Patch(facecolor=SURFACE_COLOUR, edgecolor=SURFACE_EDGE, alpha=0.6,
+                 label=r'$\mathcal{S}_F$')
+
+
+def _finish_axes(ax: Axes, joint_names: tuple[str, ...], lower: np.ndarray, upper: np.ndarray,
+                 title: str, extra: list[Patch]) -> None:
+    """Label the axes, tick them every 90° within lower..upper (3,) [deg], view, legend."""
     for j, axis in enumerate((ax.xaxis, ax.yaxis, ax.zaxis)):
-        axis.set_label_text(rf'$\theta_{j + 1}$ ({robot.joint_names[j]}) [deg]')
+        axis.set_label_text(rf'$\theta_{j + 1}$ ({joint_names[j]}) [deg]')
         ticks = np.arange(np.ceil(lower[j] / 90.0), np.floor(upper[j] / 90.0) + 1) * 90.0
         axis.set_ticks(ticks)
     ax.set_xlim(lower[0], upper[0])
