@@ -296,6 +296,33 @@ def _check(args: argparse.Namespace) -> Scene:
     return scene
 
 
+def _plan_and_run(director: Director, args: argparse.Namespace, scene: Scene,
+                  progress: Progress) -> int:
+    """Plan, then run the drills and print the summary; return the exit code of `main`."""
+    runs_wanted = len(args.drill) + args.trials or 1
+    motion = director.plan()
+    if not motion.succeeded:
+        print(f'scene {scene.name}: {motion.message}')
+        return 1
+    progress.line(f'plan found in {motion.plan_time_s:.3f} s; approach: '
+                  f'{motion.approach or "not reported"}; {runs_wanted} run(s)')
+    runs: list[RunReport] = []
+    for number in range(1, runs_wanted + 1):
+        report = director.run(number, record=args.png is not None, timeout=args.timeout)
+        runs.append(report)
+        progress.line(f'run {number}/{runs_wanted}: {report.drill or "no drill"} -> '
+                      f'{"reached" if report.ok else "FAILED: " + report.message}')
+    print(summarize(scene, motion, runs))
+    png_run = pick_run_to_draw(runs)
+    if args.png is not None and png_run is not None:
+        try:
+            print(f'wrote {write_motion_png(scene, png_run, args.png)}')
+        except ImportError as error:
+            print(f'ftplan-bringup: cannot draw {args.png}: {error}', file=sys.stderr)
+            return 1
+    return 0 if all(r.ok for r in runs) else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the bringup; return the exit code (0: every run reached the goal safely)."""
     args = _parser().parse_args(argv)
@@ -305,7 +332,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f'ftplan-bringup: error: {error}', file=sys.stderr)
         return 2
     progress = Progress(width=7)
-    runs_wanted = len(args.drill) + args.trials or 1
     try:
         rclpy.init(args=['--ros-args'] + (args.ros_args or []),
                    signal_handler_options=SignalHandlerOptions.NO)
@@ -325,28 +351,7 @@ def main(argv: list[str] | None = None) -> int:
                       drills=args.drill, random_drills=args.trials, seed=args.seed,
                       log_level=None if args.verbose else LoggingSeverity.WARN)
         client = PlanClient(interrupted=interrupted)
-        director = Director(client, scene, progress)
-        motion = director.plan()
-        if not motion.succeeded:
-            print(f'scene {scene.name}: {motion.message}')
-            return 1
-        progress.line(f'plan found in {motion.plan_time_s:.3f} s; approach: '
-                      f'{motion.approach or "not reported"}; {runs_wanted} run(s)')
-        runs: list[RunReport] = []
-        for number in range(1, runs_wanted + 1):
-            report = director.run(number, record=args.png is not None, timeout=args.timeout)
-            runs.append(report)
-            progress.line(f'run {number}/{runs_wanted}: {report.drill or "no drill"} -> '
-                          f'{"reached" if report.ok else "FAILED: " + report.message}')
-        print(summarize(scene, motion, runs))
-        png_run = pick_run_to_draw(runs)
-        if args.png is not None and png_run is not None:
-            try:
-                print(f'wrote {write_motion_png(scene, png_run, args.png)}')
-            except ImportError as error:
-                print(f'ftplan-bringup: cannot draw {args.png}: {error}', file=sys.stderr)
-                return 1
-        return 0 if all(r.ok for r in runs) else 1
+        return _plan_and_run(Director(client, scene, progress), args, scene, progress)
     except KeyboardInterrupt:
         print('ftplan-bringup: interrupted; shutting the nodes down', file=sys.stderr)
         return 130
