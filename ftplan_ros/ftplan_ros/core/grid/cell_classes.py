@@ -177,6 +177,7 @@ def _mark_cells(counts, toward, width, base, step):
             counts[high + 1] -= 1
 
 
+# One piece, as a kernel: its three cell loops share the per-θ_1 and per-row scratch arrays.
 @numba.njit(cache=True)
 def _classify(lengths, link_radius, centres, radii, arms, lower, step, certified, possible):
     """Fill `certified` and `possible` (N, N, N) over the N^3 cells of the lattice.

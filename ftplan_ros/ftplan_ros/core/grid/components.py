@@ -237,6 +237,7 @@ def _join(parent, a, b):
     return b
 
 
+# One piece, as a kernel: finding runs, joining them and numbering share one union-find.
 @numba.njit(cache=True)
 def _runs(mask, words, shape, axes, joined, wrap):
     """Find the runs of `mask` (flat, C order) and their components (see `Components`).

@@ -273,6 +273,7 @@ _UNSEEN = 255  # `_bfs_kernel`'s step code of a cell not reached yet
 _SOURCE = 254  # and of a source cell
 
 
+# One piece, as a kernel: the search and the walk back share the queue and each cell's step.
 @numba.njit(cache=True)
 def _bfs_kernel(mask, shape, periodic, offsets, sources, target):
     """Breadth-first search over flat cells; returns the flat path or an empty array.

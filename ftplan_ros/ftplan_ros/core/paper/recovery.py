@@ -173,6 +173,7 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     return RecoveryPath(joint, level, path)
 
 
+# One piece, as a kernel: the slice's nodes, arcs and Dijkstra share per-call scratch arrays.
 @numba.njit(cache=True)
 def _slice_route(values, vertices, triangles, triangle_edges, edges, point_of, segment_of,
                  live, beside_start, level, joint, start, n_points, source, goal):

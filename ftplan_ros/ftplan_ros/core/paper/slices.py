@@ -104,6 +104,7 @@ def _find(parent, a):
     return root
 
 
+# One piece, as a kernel: one sweep of the levels keeps the union-find and active triangles.
 @numba.njit(cache=True)
 def _sweep(phi, corners, sides, segment_ends, goal_point, goal_segment, nominal_points,
            nominal_segments, levels):
