@@ -6,7 +6,7 @@ the elbow (whose lock no pose task on these arms survives: see the README). For 
 task, in the same run:
 
 * the planner, cold (no traced manifolds kept between tasks), and, when it finds a
-  plan, a 50-trial drill of it (dense sampling, core/drill.py) as the referee;
+  plan, a 50-trial drill of it (dense sampling, core/planning/drill.py) as the referee;
 * the baseline: for each of up to 8 collision-free inverse-kinematics solutions of the
   start (clearest first), the goal solution nearest it, a joint path between them
   (straight, or OMPL's RRT-Connect when that collides; checked by sampling), then at 8

@@ -144,14 +144,14 @@ class SurfaceSearch:
         refinements = [None] if start_configuration is not None else \
             list(subdivisions or (1, self.options.candidate_refinement))
         blocked: tuple[tuple[str, ...], ...] = ()
-        for subdivisions in refinements:
-            if subdivisions is None:
+        for per_step in refinements:
+            if per_step is None:
                 candidates = self._given_start(start_configuration)
             else:
-                candidates = self._start_candidates(M_s, subdivisions)
+                candidates = self._start_candidates(M_s, per_step)
             search = self._search_preferred(candidates, arc_points, arc_laps)
             stats.update(search.stats, start_candidates=len(candidates),
-                         candidate_subdivisions=subdivisions or 1)
+                         candidate_subdivisions=per_step or 1)
             # A round whose starts pass eq. 6 keeps the joints that blocked the one before
             # (as stats does).
             blocked = search.blocked_joints or blocked
