@@ -30,12 +30,14 @@ tasks, orientation [rad]). A scene file without a robot takes it from
 Locked joints are remembered in one place (locks.py) whatever the executor is doing,
 idle included, until they are declared repaired (`~/reset`, std_srvs/Trigger); no
 command that would move one is ever published, and an execution is refused while one is
-locked. An execution is also refused when the current obstacles (scene and
-/ftplan/obstacles) touch a vertex of the plan's S_F: the obstacles changed since the
-plan, so plan again. Obstacles that arrive during an execution are checked against the
-rest of the commanded motion (certified) and against S_F: on the approach the arm stops
-and a new approach is planned from where it stands; on the nominal or recovery path it
-stops there safely, and the execution fails with the reason. A second lock in one
+locked. An execution is also refused when obstacle updates were lost (obstacle_topic.py:
+until a full set arrives), and when the current obstacles (scene and /ftplan/obstacles)
+touch a vertex of the plan's S_F: the obstacles changed since the plan, so plan again.
+Obstacles that arrive during an execution are checked against the rest of the commanded
+motion (certified) and against S_F: on the approach the arm stops and a new approach is
+planned from where it stands; on the nominal or recovery path it stops there safely, and
+the execution fails with the reason. Obstacle updates lost during an execution stop the
+arm too and fail it: an obstacle may have come into its way unseen. A second lock in one
 execution stops the arm safely too. When /joint_states stops for `joint_state_timeout`
 during an execution, a watchdog commands a stop and fails it.
 
@@ -62,7 +64,6 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
-from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
     create_joint_trajectory,
@@ -92,7 +93,7 @@ from .locks import (
     read_lock_event,
 )
 from .motion import progress_along, time_path
-from .obstacles import ObstacleSet
+from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
 from .params import (
     add_validators,
     check_startup_parameters,
@@ -115,7 +116,6 @@ from .topics import (
     JOINT_COMMAND,
     JOINT_STATES,
     LOCKED_JOINT,
-    OBSTACLES,
     RESET_SERVICE,
     ROBOT_DESCRIPTION,
     START_CONFIGURATION,
@@ -204,7 +204,9 @@ class ExecutorNode(Node):
             self._last_joint_state = 0.0  # monotonic [s] of the last good joint state
             self._last_motion = 0.0  # monotonic [s] of the last joint state that moved
             self._last_rejection_report = 0.0
-            self._obstacles = ObstacleSet(None)
+            self.obstacle_topic = ObstacleTopic(self, self.diagnostics,
+                                                on_update=self._obstacles_updated)
+            self._obstacles = self.obstacle_topic.obstacles
             self._start_msg: JointState | None = None
             self._trajectory_msg: JointTrajectory | None = None
             self._surface_msg: Float64MultiArray | None = None
@@ -270,8 +272,6 @@ class ExecutorNode(Node):
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
         self.locked_joint_subscription = self.create_subscription(
             JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
-        self.obstacle_subscription = self.create_subscription(
-            MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
         self.start_subscription = self.create_subscription(
             JointState, START_CONFIGURATION, self.start_configuration_callback, LATCHED_QOS)
         self.trajectory_subscription = self.create_subscription(
@@ -301,8 +301,7 @@ class ExecutorNode(Node):
             self.locks = JointLocks(names)
             self.q = self._previous_q = None
         self.scene, self.names = scene, names
-        for problem in problems:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {problem}')
+        self.obstacle_topic.report_problems(problems)
 
     def _scene_changed(self, scene: Scene) -> None:
         """Take a new robot from /robot_description (stopping an execution under way)."""
@@ -391,21 +390,22 @@ class ExecutorNode(Node):
             if info is not None:
                 self.plan_infos.add(info)
 
-    def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Keep the obstacle topic; during an execution, check the rest of the motion."""
-        try:
-            self._obstacles.update(msg)
-        except ValueError as error:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
-                                      f'the {len(self._obstacles)} previous')
+    def _obstacles_updated(self) -> None:
+        """During an execution: stop when updates were lost, else check the rest of the motion."""
+        if self.state not in ACTIVE:
             return
-        if self.state in ACTIVE:
-            try:
-                self._check_new_obstacles()
-            except Exception as error:  # noqa: BLE001 - a callback must never raise
-                self.get_logger().error(traceback.format_exc())
+        try:
+            if self._obstacles.lost:
                 self._stop()
-                self._fail(f'internal executor error: {error!r}')
+                self._fail(f'{self._obstacles.lost} while {self.state.value}: an obstacle may '
+                           f'be in the way unseen, so the arm is stopped where it is; '
+                           f'{FULL_SET_FIX}, then plan again')
+                return
+            self._check_new_obstacles()
+        except Exception as error:  # noqa: BLE001 - a callback must never raise
+            self.get_logger().error(traceback.format_exc())
+            self._stop()
+            self._fail(f'internal executor error: {error!r}')
 
     def _check_new_obstacles(self) -> None:
         """Stop when new obstacles meet the rest of the motion or (before a lock) S_F.
@@ -493,6 +493,8 @@ class ExecutorNode(Node):
             locked = [self.names[j] for j in self.locks.joints]
             return False, (f'{locked} locked ({self.locks.describe()}) and would be commanded: '
                            f'call {self.get_name()}/reset once repaired')
+        if self._obstacles.lost:
+            return False, f'{self._obstacles.lost}: {FULL_SET_FIX}, then execute again'
         if self._surface_meets_obstacle(self.plan.surface):
             return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
                            'surface now meets one; plan again')

@@ -26,6 +26,11 @@ Its task, tolerances, tolerated joints, obstacle set and approach are values of 
 'ftplan_planner: plan' status (plan_info.py). A failed request leaves the last good
 plan's topics as they were.
 
+Obstacle updates are applied one by one, in order (obstacle_topic.py); while some were
+lost, every request is refused with the reason until a full set (a MarkerArray whose
+first marker is DELETEALL) arrives. A plan is made for the obstacles of the moment its
+planning starts, and its status names them (`obstacle_set`).
+
 The arm where it stands (`approach`, default on): with a joint state, the planner prefers
 a θ_s the arm reaches from it along M_s^F (the end effector staying at x_s), else one a
 collision-free joint move reaches (core/approach.py), and publishes that approach, timed
@@ -95,7 +100,8 @@ from ftplan_ros.core.scene import (
 
 from .inputs import read_arm_state
 from .motion import time_path
-from .obstacles import ObstacleSet, obstacle_set_key, shape_from_obstacle
+from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
+from .obstacles import obstacle_set_key, shape_from_obstacle
 from .params import (
     add_validators,
     array_parameter,
@@ -122,7 +128,6 @@ from .topics import (
     APPROACH,
     FAILURE_SURFACE,
     JOINT_STATES,
-    OBSTACLES,
     PLAN_MARKERS,
     PLAN_SERVICE,
     PLANNER_NODE,
@@ -145,6 +150,10 @@ class RequestError(ValueError):
     """A request field the planner cannot use; the message names it."""
 
 
+class StaleInputError(Exception):
+    """The obstacles are not those published: updates were lost."""
+
+
 class PlanTimeout(Exception):  # noqa: N818 - a stop signal, not an error of the caller
     """Raised from the core's progress hook once a request has used up `plan_timeout`."""
 
@@ -159,7 +168,9 @@ class PlannerNode(Node):
             self._lock = threading.Lock()
             self.cache = ManifoldCache()
             self.scene: Scene | None = None
-            self._obstacles = ObstacleSet(None)
+            self.obstacle_topic = ObstacleTopic(self, self.diagnostics, lock=self._lock,
+                                                log=True)
+            self._obstacles = self.obstacle_topic.obstacles
             self._joint_state: np.ndarray | None = None
             self._joint_state_problem = 'no joint state received yet on /joint_states'
             self._early_joint_state: JointState | None = None  # arrived before the robot
@@ -223,8 +234,6 @@ class PlannerNode(Node):
     def _create_interfaces(self) -> None:
         self.joint_state_subscription = self.create_subscription(
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
-        self.obstacle_subscription = self.create_subscription(
-            MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
         self.start_publisher = self.create_publisher(
             JointState, START_CONFIGURATION, LATCHED_QOS)
         self.trajectory_publisher = self.create_publisher(
@@ -305,8 +314,7 @@ class PlannerNode(Node):
             self.cache = ManifoldCache()
             self._joint_state = None
             early, self._early_joint_state = self._early_joint_state, None
-        for problem in problems:
-            self.diagnostics.rejected('obstacles', f'ignored obstacle markers: {problem}')
+        self.obstacle_topic.report_problems(problems)
         if early is not None:
             self.joint_state_callback(early)
 
@@ -360,28 +368,6 @@ class PlannerNode(Node):
             self.diagnostics.report('joint_states', 'OK', 'receiving joint states',
                                     {'configuration': format_vector(q)})
 
-    def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Apply obstacle markers; malformed ones are reported and the old set kept."""
-        with self._lock:
-            try:
-                self._obstacles.update(msg)
-            except ValueError as error:
-                kept = len(self._obstacles)
-                problem = f'ignored obstacle markers: {error}; keeping the {kept} previous'
-                error_seen = True
-            else:
-                kept = len(self._obstacles)
-                error_seen = False
-            waiting = self._obstacles.pending
-        if error_seen:
-            self.diagnostics.rejected('obstacles', problem, {'obstacles': kept})
-        elif waiting:
-            self.diagnostics.report('obstacles', 'OK', f'{waiting} obstacle marker arrays '
-                                    'wait for the robot', {'obstacles': kept}, log=True)
-        else:
-            self.diagnostics.report('obstacles', 'OK', f'{kept} obstacles from {OBSTACLES}',
-                                    {'obstacles': kept}, log=True)
-
     # The service --------------------------------------------------------------------
 
     def plan_callback(self, request: GetPlan.Request, response: GetPlan.Response,
@@ -403,6 +389,9 @@ class PlannerNode(Node):
             result, approach = self._plan(scene, q, time.monotonic() + timeout)
         except (InputError, RequestError) as error:
             self._report_failure(f'bad plan request: {error}', values)
+            return response
+        except StaleInputError as error:
+            self._report_failure(str(error), values)
             return response
         except PlanTimeout:
             self._report_failure(f'no answer within plan_timeout = {timeout:g} s: the search '
@@ -454,8 +443,11 @@ class PlannerNode(Node):
             q = self._joint_state
             joint_state_problem = self._joint_state_problem
             scene = self._obstacles.scene()
+            lost = self._obstacles.lost
         if scene is None:
             raise InputError('robot', self.source.waiting)
+        if lost:
+            raise StaleInputError(f'{lost}: {FULL_SET_FIX}, then plan again')
         robot = self._task_robot(scene)
         kind = robot.task_kind
         if request.start.header.frame_id == '':

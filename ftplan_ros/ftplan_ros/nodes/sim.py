@@ -20,6 +20,9 @@ slows the arm down instead of making it jump past events. It publishes /joint_st
 every tick, checks every motion against the scene and the
 obstacle topic (sampled at most `collision_check_step` apart) and reports collisions,
 the minimum clearance and arrival at the goal on /diagnostics ('ftplan_sim: arm').
+Obstacle updates are applied one by one, in order; lost ones are reported as
+'ftplan_sim: obstacles' (ERROR, obstacle_topic.py): until a full set arrives, the
+collision checks may miss an obstacle.
 `~/reset` (std_srvs/Trigger) puts the arm back at its initial configuration, unlocks
 every joint and clears the counters, for repeated drills.
 
@@ -46,7 +49,6 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
-from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
     create_joint_state,
@@ -62,7 +64,7 @@ from ftplan_ros.core.task_space import POINT_SIZE, unit_vector
 
 from .inputs import angle_problem
 from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem, read_lock_event
-from .obstacles import ObstacleSet
+from .obstacle_topic import ObstacleTopic
 from .params import (
     add_validators,
     array_parameter,
@@ -73,7 +75,7 @@ from .params import (
     non_negative,
     positive,
 )
-from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
+from .qos import EVENT_QOS_DEPTH, SERVICE_QOS
 from .reporting import Diagnostics, format_vector
 from .scene_source import SceneSource
 from .spinning import run_node
@@ -82,7 +84,6 @@ from .topics import (
     JOINT_COMMAND,
     JOINT_STATES,
     LOCKED_JOINT,
-    OBSTACLES,
     RESET_SERVICE,
     ROBOT_DESCRIPTION,
     SIM_NODE,
@@ -221,7 +222,8 @@ class SimNode(Node):
             self.scene: Scene | None = None   # bound to task_kind (task_scene)
             self._declare_parameters()
             self.names: list[str] = []
-            self._obstacles = ObstacleSet(None)
+            self.obstacle_topic = ObstacleTopic(self, self.diagnostics)
+            self._obstacles = self.obstacle_topic.obstacles
             self.q = np.zeros(0)
             self.initial = np.zeros(0)
             self.motion: Motion | None = None
@@ -238,8 +240,6 @@ class SimNode(Node):
                 JointTrajectory, JOINT_COMMAND, self.joint_command_callback, EVENT_QOS_DEPTH)
             self.locked_joint_subscription = self.create_subscription(
                 JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
-            self.obstacle_subscription = self.create_subscription(
-                MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
             self.reset_service = self.create_service(Trigger, RESET_SERVICE,
                                                      self.reset_callback, qos_profile=SERVICE_QOS)
             self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
@@ -299,8 +299,7 @@ class SimNode(Node):
         self.motion = None
         self.locked = {}
         self._clear_counters()
-        for problem in problems:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {problem}')
+        self.obstacle_topic.report_problems(problems)
         self._check_clearance(self.q[None, :])
         self.publish_joint_state(np.zeros(len(self.names)))
         self.report('at the initial configuration', log=True)
@@ -420,14 +419,6 @@ class SimNode(Node):
             self.motion = None
         self.get_logger().info(f'{event.name} locked at {value:.6f} rad')
         self.report(f'{event.name} locked at {value:.6f} rad', 'WARN')
-
-    def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Add the obstacle topic to the collision checks."""
-        try:
-            self._obstacles.update(msg)
-        except ValueError as error:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
-                                      f'the {len(self._obstacles)} previous')
 
     def reset_callback(self, request: Trigger.Request, response: Trigger.Response,
                        ) -> Trigger.Response:
