@@ -1,4 +1,4 @@
-"""Issue 33: every obstacle update applied in order, and lost ones refused.
+"""Issue 33: every obstacle update applied in order, lost ones refused, plans tied to a robot.
 
 Through real nodes and real DDS in one process. A node "busy" for a while is one taken
 off the executor: DDS keeps queueing its updates meanwhile, as it does while a long plan
@@ -9,16 +9,20 @@ import time
 
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from nav_msgs.srv import GetPlan
+from rclpy.parameter import Parameter
 from ros_support import FIG3A as FIG3A_FILE
 from ros_support import wait_for
-from std_msgs.msg import Header
+from spatial_scenes import PANDA_URDF, X_G, X_S, description_parameters, panda_scene
+from std_msgs.msg import Header, String
 from std_srvs.srv import Trigger
 from test_ros_executor import SLOW, execution, plan, state_of
 from test_ros_planner import request
+from test_ros_planner_spatial import ask, pose
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import read_obstacle_markers
-from ftplan_ros.core import load_scene
+from ftplan_ros.core import load_scene, robot_from_urdf
+from ftplan_ros.core.robot import robot_digest
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.obstacle_updates import Gap
 from ftplan_ros.nodes.obstacles import obstacle_from_shape, obstacle_set_key
@@ -205,3 +209,67 @@ def test_updates_lost_during_an_execution_stop_the_arm(ros):
     assert not [s for s in execution(ros, number) if s.values['state'] == 'done']
     wait_for(lambda: [s for s in ros.probe.statuses('ftplan_sim: arm')
                       if s.values['state'] == 'stopped'], what='the sim arm to stop')
+
+
+def test_a_plan_for_a_replaced_robot_is_refused_and_never_executed(ros, tmp_path):
+    """Row 3: a second URDF published during a plan: the answer came for the old robot and
+    nothing in the status or the latched topics named the robot."""
+    scene_file = panda_scene(tmp_path, robot=False)
+    parameters = description_parameters()
+    planner = ros.make(PlannerNode, scene_file, **parameters)
+    ros.make(ExecutorNode, scene_file, **parameters)
+    urdf = PANDA_URDF.read_text()
+    hand = ('<collision>\n      <origin xyz="0 0 0.004" rpy="0 0 0"/>\n'
+            '      <geometry><box size="0.07 0.214 0.042"/>')
+    wider = urdf.replace(hand, hand.replace('0.042', '0.043'))  # same joints, 1 mm more hand
+    pairs = parameters['disabled_collisions']
+    old, new = (robot_digest(robot_from_urdf(
+        text, parameters['tip_link'], parameters['base_link'], [0.0, 0.0, 0.0],
+        [pairs[k:k + 2] for k in range(0, len(pairs), 2)])) for text in (urdf, wider))
+    assert old != new
+    ros.probe.publish(String, '/robot_description', String(data=urdf), LATCHED_QOS)
+    for node in ('ftplan_planner', 'ftplan_executor'):
+        wait_for(lambda n=node: ros.probe.statuses(f'{n}: robot_description'))
+    first, status = ask(ros, pose(X_S))
+    assert first.plan.poses and status.values['robot'] == old
+    wait_for(lambda: [s for s in ros.probe.statuses('ftplan_executor: execution')
+                      if s.values['plan'] == status.values['stamp']], what='the plan held')
+    planner.set_parameters([Parameter('seed', value=1)])  # no cached manifolds: ~2.4 s
+    client = ros.probe.create_client(GetPlan, '/ftplan/plan')
+    future = client.call_async(GetPlan.Request(start=pose(X_S), goal=pose(X_G)))
+    # The URDF takes ~0.7 s to read and check: it replaces the robot mid-plan.
+    ros.probe.publish(String, '/robot_description', String(data=wider), LATCHED_QOS)
+    wait_for(future.done, 60.0, 'the second plan')
+    second = plan_status(ros, future.result())
+    assert future.result().plan.poses == []
+    assert second.message == (f'/robot_description replaced the robot while it was planned '
+                              f'for: the plan is for robot {old}, the robot is now {new}; '
+                              'plan again')
+    for node in ('ftplan_planner', 'ftplan_executor'):
+        wait_for(lambda n=node: len(ros.probe.statuses(f'{n}: robot_description')) == 2)
+    refused = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert not refused.success
+    assert refused.message == (f'plan {status.values["stamp"]} was made for robot {old}, but '
+                               f'the robot is now {new} (from /robot_description): plan again')
+    third, again = ask(ros, pose(X_S))
+    assert third.plan.poses and again.values['robot'] == new
+    wait_for(lambda: [s for s in ros.probe.statuses('ftplan_executor: execution')
+                      if s.values['plan'] == again.values['stamp']], what='the new plan held')
+    accepted = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert accepted.success, accepted.message
+
+
+def test_the_plan_status_goes_out_latched_for_an_executor_that_joins_late(ros):
+    """The executor reads a plan's robot from /ftplan/plan/info, which a late joiner gets
+    (the status on /diagnostics is gone by then: it did not know what the plan tolerates)."""
+    ros.make(PlannerNode)
+    ros.make(SimNode, max_joint_speed=4.0)
+    response = ros.probe.call(GetPlan, '/ftplan/plan', request())
+    key = plan_status(ros, response).values['stamp']
+    ros.make(ExecutorNode)
+    held = wait_for(lambda: [s for s in ros.probe.statuses('ftplan_executor: execution')
+                             if s.values['plan'] == key], what='the late executor to hold it')
+    assert held[-1].values.get('tolerated_joints') == 'joint1,joint2,joint3'
+    accepted = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    assert accepted.success, accepted.message
+

@@ -10,7 +10,6 @@ urdf`, parsed by Pinocchio) or DH tables (`type: dh`); a task's form says its ki
 
 from __future__ import annotations
 
-import hashlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -23,7 +22,7 @@ from .chain import ChainModel
 from .dh import DHRow, chain_from_dh
 from .errors import InputError
 from .files import load_yaml, read_text
-from .robot import PlanarChain, Robot
+from .robot import PlanarChain, Robot, geometry_sha256
 from .self_collision import default_disabled_pairs
 from .spatial import SpatialArm
 from .task_space import POINT_SIZE, unit_vector
@@ -462,18 +461,10 @@ def scene_fingerprint(scene: Scene) -> dict:
     if isinstance(scene.robot, PlanarChain):
         return scene_to_dict(scene)
     robot = scene.robot
-    geometry = hashlib.sha256(np.ascontiguousarray(robot.kernel_parameters).tobytes())
-    for link in robot.collision_shapes:
-        shape = link.shape
-        geometry.update(repr((link.link, shape.kind, shape.radius, shape.size,
-                              shape.length)).encode())
-        for array in (link.placement, shape.vertices, shape.faces):
-            geometry.update(np.ascontiguousarray(array).tobytes())
-    geometry.update(repr(robot.self_collision_pairs).encode())
     limits = [[float(v) if math.isfinite(v) else None for v in row] for row in robot.limits]
     out: dict[str, Any] = {
         'robot': {'task_kind': robot.task_kind, 'joint_names': list(robot.joint_names),
-                  'limits': limits, 'geometry_sha256': geometry.hexdigest()},
+                  'limits': limits, 'geometry_sha256': geometry_sha256(robot)},
         'obstacles': [_obstacle_to_dict(ob) for ob in scene.obstacles],
         'frame_id': scene.frame_id,
         'tolerate': None if scene.tolerate is None else list(scene.tolerate)}

@@ -3,8 +3,9 @@
     ros2 run ftplan_ros executor --ros-args -p scene_file:=fig3a.yaml
 
 It keeps the last plan from the planner's latched topics (θ_s, the nominal trajectory,
-the S_F web; the nominal path is the web path equal to the trajectory). A call of
-/ftplan/execute (std_srvs/Trigger):
+the S_F web; the nominal path is the web path equal to the trajectory) once its plan
+status has arrived on /ftplan/plan/info (plan_info.py). A call of /ftplan/execute
+(std_srvs/Trigger):
 
 1. approaching: moves the arm to θ_s by the planner's approach (/ftplan/plan/approach)
    when it starts where the arm stands, else by one the core plans now
@@ -20,7 +21,7 @@ the S_F web; the nominal path is the web path equal to the trajectory). A call o
 4. done (at the goal) or failed (with the reason).
 
 A lock of a joint the plan does not tolerate (the planner names the tolerated joints in
-its 'plan' status, plan_info.py) is handled the same way: a recovery path the core
+its plan status) is handled the same way: a recovery path the core
 finds in S_F is safe and is followed; without one the arm stays stopped and the
 execution fails with "joint X is not tolerated by this plan". Arrival is judged with
 the core's task errors against the plan's goal (position [m] and, for axis and pose
@@ -30,16 +31,18 @@ tasks, orientation [rad]). A scene file without a robot takes it from
 Locked joints are remembered in one place (locks.py) whatever the executor is doing,
 idle included, until they are declared repaired (`~/reset`, std_srvs/Trigger); no
 command that would move one is ever published, and an execution is refused while one is
-locked. An execution is also refused when obstacle updates were lost (obstacle_topic.py:
-until a full set arrives), and when the current obstacles (scene and /ftplan/obstacles)
-touch a vertex of the plan's S_F: the obstacles changed since the plan, so plan again.
-Obstacles that arrive during an execution are checked against the rest of the commanded
-motion (certified) and against S_F: on the approach the arm stops and a new approach is
-planned from where it stands; on the nominal or recovery path it stops there safely, and
-the execution fails with the reason. Obstacle updates lost during an execution stop the
-arm too and fail it: an obstacle may have come into its way unseen. A second lock in one
-execution stops the arm safely too. When /joint_states stops for `joint_state_timeout`
-during an execution, a watchdog commands a stop and fails it.
+locked. An execution is also refused when the plan was made for another robot than the
+current one (their digests differ: /robot_description replaced it, with the same joint
+names), when obstacle updates were lost (obstacle_topic.py: until a full set arrives),
+and when the current obstacles (scene and /ftplan/obstacles) touch a vertex of the
+plan's S_F: the obstacles changed since the plan, so plan again. Obstacles that arrive
+during an execution are checked against the rest of the commanded motion (certified)
+and against S_F: on the approach the arm stops and a new approach is planned from where
+it stands; on the nominal or recovery path it stops there safely, and the execution
+fails with the reason. Obstacle updates lost during an execution stop the arm too and
+fail it: an obstacle may have come into its way unseen. A second lock in one execution
+stops the arm safely too. When /joint_states stops for `joint_state_timeout` during an
+execution, a watchdog commands a stop and fails it.
 
 Commands go out on /ftplan/joint_command as JointTrajectory (strictly increasing times,
 the first point one step ahead of where the arm is), so a ros2_control
@@ -84,6 +87,7 @@ from ftplan_ros.core import (
 from ftplan_ros.core.angles import configuration_difference
 from ftplan_ros.core.approach import Approach, ApproachOptions, ApproachPlanner, Route
 from ftplan_ros.core.paths import cumulative_fractions, point_at_fraction
+from ftplan_ros.core.robot import robot_digest
 
 from .inputs import read_arm_state
 from .locks import (
@@ -101,7 +105,7 @@ from .params import (
     destroyed_if_start_fails,
     positive,
 )
-from .plan_info import PLANNER_STATUS, PlanInfos, join_names, read_plan_info
+from .plan_info import PlanInfos, join_names, read_plan_info
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
 from .scene_source import SceneSource
@@ -109,20 +113,19 @@ from .spinning import run_node
 from .tasks import bind_task_kind
 from .topics import (
     APPROACH,
-    DIAGNOSTICS,
     EXECUTE_SERVICE,
     EXECUTOR_NODE,
     FAILURE_SURFACE,
     JOINT_COMMAND,
     JOINT_STATES,
     LOCKED_JOINT,
+    PLAN_INFO,
     RESET_SERVICE,
     ROBOT_DESCRIPTION,
     START_CONFIGURATION,
     TRAJECTORY,
 )
 
-_DIAGNOSTICS_DEPTH = 50
 _REJECTION_REPORT_PERIOD = 1.0  # [s] a stream of bad joint states: one report per period
 
 
@@ -254,9 +257,6 @@ class ExecutorNode(Node):
         declare(self, 'status_rate', 10.0,
                 'Rate [Hz] of the progress reports on /diagnostics while executing (1 Hz when '
                 'idle).', read_only=True)
-        declare(self, 'planner_status', PLANNER_STATUS,
-                'Name of the planner\'s plan status on /diagnostics (task, tolerances and '
-                'tolerated joints of each plan).')
         validators = {name: positive for name in (
             'max_joint_speed', 'arrival_tolerance', 'max_path_offset', 'path_tolerance',
             'stopped_tolerance', 'stop_timeout', 'stop_settle_time', 'start_timeout',
@@ -272,6 +272,8 @@ class ExecutorNode(Node):
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
         self.locked_joint_subscription = self.create_subscription(
             JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
+        self.info_subscription = self.create_subscription(
+            DiagnosticArray, PLAN_INFO, self.plan_info_callback, LATCHED_QOS)
         self.start_subscription = self.create_subscription(
             JointState, START_CONFIGURATION, self.start_configuration_callback, LATCHED_QOS)
         self.trajectory_subscription = self.create_subscription(
@@ -280,8 +282,6 @@ class ExecutorNode(Node):
             Float64MultiArray, FAILURE_SURFACE, self.failure_surface_callback, LATCHED_QOS)
         self.approach_subscription = self.create_subscription(
             JointTrajectory, APPROACH, self.approach_callback, LATCHED_QOS)
-        self.diagnostics_subscription = self.create_subscription(
-            DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, _DIAGNOSTICS_DEPTH)
         self.execute_service = self.create_service(
             Trigger, EXECUTE_SERVICE, self.execute_callback, qos_profile=SERVICE_QOS)
         self.reset_service = self.create_service(Trigger, RESET_SERVICE, self.reset_callback,
@@ -350,7 +350,7 @@ class ExecutorNode(Node):
         self._approach_msg = msg
 
     def _assemble_plan(self) -> None:
-        """Hold a new plan once θ_s, trajectory and S_F of one plan have all arrived."""
+        """Hold a new plan once θ_s, trajectory, S_F and info of one plan have all arrived."""
         start, trajectory, surface = self._start_msg, self._trajectory_msg, self._surface_msg
         if start is None or trajectory is None or surface is None or self.scene is None:
             return
@@ -369,26 +369,29 @@ class ExecutorNode(Node):
         if paths.shape[2] != len(self.names) or paths.shape[1] != len(nominal):
             return  # S_F of another plan; its own is on its way
         matches = np.flatnonzero(np.all(paths == nominal[None], axis=(1, 2)))
-        if len(matches) == 0 or not np.array_equal(nominal[0], theta_s):
-            return
+        if len(matches) == 0 or not np.array_equal(nominal[0], theta_s) or \
+                self.plan_infos.get(key) is None:
+            return  # its S_F or its plan info is still on its way
         self.plan = HeldPlan(key, theta_s, FailureSurface(paths, int(matches[0]), (), ()))
         self.get_logger().info(f'holding plan {key}: {len(nominal)} waypoints, S_F of '
                                f'{paths.shape[0]} paths')
         self.report_status(f'holding plan {key}')
 
-    def diagnostics_callback(self, msg: DiagnosticArray) -> None:
-        """Keep what the planner's plan statuses say about each plan (plan_info.py)."""
-        name = self.get_parameter('planner_status').value
+    def plan_info_callback(self, msg: DiagnosticArray) -> None:
+        """Keep what the planner's plan status says about a plan (plan_info.py)."""
         for status in msg.status:
-            if status.name != name:
-                continue
             try:
                 reading = read_diagnostic_status(status)
-            except ValueError:
+            except ValueError as error:
+                self.diagnostics.rejected('plan', f'ignored {PLAN_INFO}: {error}')
                 continue
             info = read_plan_info(reading.values) if reading.level == 'OK' else None
-            if info is not None:
-                self.plan_infos.add(info)
+            if info is None or info.stamp != stamp_key(msg.header.stamp):
+                self.diagnostics.rejected('plan', f'ignored {PLAN_INFO}: it describes no plan '
+                                          f'stamped {stamp_key(msg.header.stamp)}')
+                continue
+            self.plan_infos.add(info)
+            self._assemble_plan()
 
     def _obstacles_updated(self) -> None:
         """During an execution: stop when updates were lost, else check the rest of the motion."""
@@ -493,8 +496,9 @@ class ExecutorNode(Node):
             locked = [self.names[j] for j in self.locks.joints]
             return False, (f'{locked} locked ({self.locks.describe()}) and would be commanded: '
                            f'call {self.get_name()}/reset once repaired')
-        if self._obstacles.lost:
-            return False, f'{self._obstacles.lost}: {FULL_SET_FIX}, then execute again'
+        problem = self._stale_plan_problem()
+        if problem:
+            return False, problem
         if self._surface_meets_obstacle(self.plan.surface):
             return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
                            'surface now meets one; plan again')
@@ -506,6 +510,17 @@ class ExecutorNode(Node):
         # received so far may predate it (e.g. a reset of the arm just before it).
         self._set_state(State.APPROACHING, 'starting from the next joint state')
         return True, f'execution {self.executions}: plan {self.plan.key} accepted'
+
+    def _stale_plan_problem(self) -> str:
+        """Say why the held plan may not run on the robot and obstacles known now ('' if not)."""
+        if self._obstacles.lost:
+            return f'{self._obstacles.lost}: {FULL_SET_FIX}, then execute again'
+        info = self.plan_infos.get(self.plan.key)
+        robot = robot_digest(self.scene.robot)
+        if info is not None and info.robot != robot:
+            return (f'plan {self.plan.key} was made for robot {info.robot}, but the robot is '
+                    f'now {robot} (from {ROBOT_DESCRIPTION}): plan again')
+        return ''
 
     def _start_motion(self, q: np.ndarray) -> None:
         """Command the approach to θ_s from q (or the nominal path if the arm is there)."""

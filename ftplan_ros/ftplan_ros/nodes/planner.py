@@ -22,14 +22,17 @@ after the response on /ftplan/plan/start_configuration (θ_s, stamped like the P
 /ftplan/plan/trajectory (the nominal joint path, timed by `max_joint_speed`, stamped
 likewise), /ftplan/plan/failure_surface (S_F) and /ftplan/plan/approach, and 50 ms later
 on /ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does).
-Its task, tolerances, tolerated joints, obstacle set and approach are values of the
-'ftplan_planner: plan' status (plan_info.py). A failed request leaves the last good
-plan's topics as they were.
+Its robot (a digest of the model), obstacle set (a digest), task, tolerances, tolerated
+joints and approach are values of the 'ftplan_planner: plan' status (plan_info.py), which
+also goes out latched, stamped like the plan, on /ftplan/plan/info. A failed request
+leaves the last good plan's topics as they were.
 
 Obstacle updates are applied one by one, in order (obstacle_topic.py); while some were
 lost, every request is refused with the reason until a full set (a MarkerArray whose
 first marker is DELETEALL) arrives. A plan is made for the obstacles of the moment its
-planning starts, and its status names them (`obstacle_set`).
+planning starts, and its status names them (`obstacle_set`); when /robot_description
+replaces the robot while it plans, the request is refused: the plan would be for a
+robot that is gone.
 
 The arm where it stands (`approach`, default on): with a joint state, the planner prefers
 a θ_s the arm reaches from it along M_s^F (the end effector staying at x_s), else one a
@@ -55,6 +58,7 @@ import time
 import traceback
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
@@ -68,6 +72,8 @@ from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
     DEFAULT_JOINT_SPACE_FRAME,
+    create_diagnostic_array,
+    create_diagnostic_status,
     create_failure_surface,
     create_joint_state,
     create_joint_trajectory,
@@ -92,6 +98,7 @@ from ftplan_ros.core import (
 from ftplan_ros.core.approach import Approach, ApproachOptions, plan_from
 from ftplan_ros.core.free_components import PROOF_GRIDS, START_GRIDS
 from ftplan_ros.core.planner import check_plannable
+from ftplan_ros.core.robot import robot_digest
 from ftplan_ros.core.scene import (
     DEFAULT_GOAL_TOLERANCE,
     DEFAULT_ORIENTATION_TOLERANCE,
@@ -101,7 +108,7 @@ from ftplan_ros.core.scene import (
 from .inputs import read_arm_state
 from .motion import time_path
 from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
-from .obstacles import obstacle_set_key, shape_from_obstacle
+from .obstacles import shape_from_obstacle
 from .params import (
     add_validators,
     array_parameter,
@@ -128,9 +135,11 @@ from .topics import (
     APPROACH,
     FAILURE_SURFACE,
     JOINT_STATES,
+    PLAN_INFO,
     PLAN_MARKERS,
     PLAN_SERVICE,
     PLANNER_NODE,
+    ROBOT_DESCRIPTION,
     START_CONFIGURATION,
     TRAJECTORY,
 )
@@ -151,7 +160,7 @@ class RequestError(ValueError):
 
 
 class StaleInputError(Exception):
-    """The obstacles are not those published: updates were lost."""
+    """The obstacles or the robot are not those published (updates lost, robot replaced)."""
 
 
 class PlanTimeout(Exception):  # noqa: N818 - a stop signal, not an error of the caller
@@ -234,6 +243,7 @@ class PlannerNode(Node):
     def _create_interfaces(self) -> None:
         self.joint_state_subscription = self.create_subscription(
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
+        self.info_publisher = self.create_publisher(DiagnosticArray, PLAN_INFO, LATCHED_QOS)
         self.start_publisher = self.create_publisher(
             JointState, START_CONFIGURATION, LATCHED_QOS)
         self.trajectory_publisher = self.create_publisher(
@@ -382,11 +392,10 @@ class PlannerNode(Node):
         try:
             scene, q = self._request_scene(request)
             task = scene.task
-            values.update(plan_info_values(task, [scene.robot.joint_names[i]
-                                                  for i in scene.tolerated_joints]),
-                          obstacles=len(scene.obstacles),
-                          obstacle_set=obstacle_set_key(scene.obstacles))
+            values.update(plan_info_values(scene.robot, scene.obstacles, task, [
+                scene.robot.joint_names[i] for i in scene.tolerated_joints]))
             result, approach = self._plan(scene, q, time.monotonic() + timeout)
+            self._check_robot_kept(values['robot'])
         except (InputError, RequestError) as error:
             self._report_failure(f'bad plan request: {error}', values)
             return response
@@ -480,6 +489,14 @@ class PlannerNode(Node):
         task = Task(tuple(x_s.tolist()), tuple(x_g.tolist()), tolerance, angle)
         return scene.with_task(task).with_tolerated(tolerated), q
 
+    def _check_robot_kept(self, planned: str) -> None:
+        """Raise StaleInputError when the robot is no longer the one of digest `planned`."""
+        now = robot_digest(self.scene.robot)
+        if now != planned:
+            raise StaleInputError(f'{ROBOT_DESCRIPTION} replaced the robot while it was '
+                                  f'planned for: the plan is for robot {planned}, the robot '
+                                  f'is now {now}; plan again')
+
     def _scene_goal(self, scene: Scene, kind: str) -> np.ndarray:
         """Return the scene's task goal as a task point of `kind`, or raise InputError."""
         if scene.task is None:
@@ -534,10 +551,20 @@ class PlannerNode(Node):
         if pending is None:
             return
         scene, result, approach, stamp, values = pending
+        values.update(theta_s=format_vector(result.theta_s),
+                      waypoints=len(result.nominal_path),
+                      surface_paths=result.surface.paths.shape[0],
+                      min_clearance_m=result.stats.get('min_clearance_m', float('nan')))
+        message = (f'plan found in {values["plan_time_s"]:.3f} s: theta_s = '
+                   f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
+                   f'{values["approach"]}')
         try:
             names = list(scene.robot.joint_names)
             nominal = result.nominal_path
             speed = float(self.get_parameter('max_joint_speed').value)
+            self.info_publisher.publish(create_diagnostic_array(
+                [create_diagnostic_status(self.diagnostics.status_name('plan'), 'OK', message,
+                                          values)], stamp))
             self.surface_publisher.publish(create_failure_surface(result.surface.paths))
             moves = approach.path if approach is not None and approach.ok else \
                 np.zeros((0, len(names)))
@@ -553,14 +580,7 @@ class PlannerNode(Node):
             self.diagnostics.report('plan', 'ERROR', f'could not publish plan '
                                     f'{stamp_key(stamp)}: {error!r}', log=True)
             return
-        values.update(theta_s=format_vector(result.theta_s),
-                      waypoints=len(result.nominal_path),
-                      surface_paths=result.surface.paths.shape[0],
-                      min_clearance_m=result.stats.get('min_clearance_m', float('nan')))
-        self.diagnostics.report(
-            'plan', 'OK', f'plan found in {values["plan_time_s"]:.3f} s: theta_s = '
-            f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
-            f'{values["approach"]}', values, log=True)
+        self.diagnostics.report('plan', 'OK', message, values, log=True)
         with self._lock:
             self._pending_markers = (scene, result, stamp)
         self.markers_timer.reset()
