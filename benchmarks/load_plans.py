@@ -6,8 +6,9 @@
 For each `--plan-timeout`, the installed planner (`make install`; its own process, as
 `ros2 run` starts it) serves fig3a with that `plan_timeout` while this process runs the
 clients and the obstacle publisher of test/ros/loading.py: every request must be
-answered (a plan, or an empty Path with the planner's reason) and every plan's S_F must
-be collision-free for the obstacle set its status names. Prints one row per setting:
+answered (a plan, or an empty Path with the planner's reason), every plan's status must
+name the scene's robot (its digest) and every plan's S_F must be collision-free for the
+obstacle set its status names. Prints one row per setting:
 requests, answered, plans, refusals by reason, latency p50/p95/max [s] (request sent ->
 response) and the soundness counts. Exit 1 if a request went unanswered or a plan was
 unsound.

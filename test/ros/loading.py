@@ -4,10 +4,11 @@
 from (2, 0) to a goal drawn from GOALS) to a planner that some caller started on
 fig3a, while a publisher replaces the obstacles on /ftplan/obstacles at `obstacle_rate`
 [Hz] with 0-3 random disks. Every response is timed (request sent -> response). A plan's
-status names its obstacle set (`obstacle_set`, a digest of every number); its S_F (the
-failure-surface message holding a path equal to its trajectory) must be collision-free
-for that set: every path of the web is certified over its segments. An empty Path must
-come with a reason (the planner's status). Nothing here needs pytest.
+status names its robot (`robot`, a digest of the model) and its obstacle set
+(`obstacle_set`, a digest of every number): the robot must be the scene's, and its S_F
+(the failure-surface message holding a path equal to its trajectory) must be
+collision-free for that set: every path of the web is certified over its segments. An
+empty Path must come with a reason (the planner's status). Nothing here needs pytest.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from ftplan_msgs_py import (
 )
 from ftplan_ros.core import CollisionChecker, Scene
 from ftplan_ros.core.certification import certify_simplices
+from ftplan_ros.core.robot import robot_digest
 from ftplan_ros.nodes.obstacles import obstacle_from_shape, obstacle_set_key
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.reporting import stamp_key
@@ -81,7 +83,8 @@ class LoadReport:
 
 def _kind(reason: str) -> str:
     for kind in ('plan_timeout', 'no failure-tolerant plan', 'bad plan request',
-                 'internal planner error'):
+                 'internal planner error', 'obstacle updates were lost',
+                 'replaced the robot'):
         if kind in reason:
             return kind
     return reason[:40]
@@ -220,6 +223,7 @@ class LoadRun:
 
     def _judge(self, report: LoadReport) -> None:
         robot = self.scene.robot
+        digest = robot_digest(robot)
         for latency, response in self.results:
             if response is None:
                 report.unanswered += 1
@@ -232,6 +236,10 @@ class LoadRun:
                 report.refused[kind] = report.refused.get(kind, 0) + 1
                 continue
             report.plans += 1
+            if status is not None and status.values.get('robot') != digest:
+                report.unsound.append(f'plan {key}: made for robot '
+                                      f'{status.values.get("robot")}, not the scene\'s {digest}')
+                continue
             obstacles = self.sets.get(status.values.get('obstacle_set', '')) if status else None
             index, nominal = self.trajectories.get(key, (len(self.surfaces), None))
             web = self.surfaces[index] if index < len(self.surfaces) else None
