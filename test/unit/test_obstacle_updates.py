@@ -121,5 +121,7 @@ def test_updates_dropped_while_waiting_for_the_robot_are_a_loss():
     for k in range(101):
         obstacles.update(update(sphere(k)))
     obstacles.rebase(FIG3A)
-    assert 'the oldest were dropped' in obstacles.lost and len(obstacles) == 100
+    assert obstacles.lost == ('obstacle updates were lost (more than 100 arrived before the '
+                              'robot: the oldest were dropped)')
+    assert len(obstacles) == 100
     assert np.isfinite(obstacles.checker.min_clearance(np.zeros((1, 3)))).all()

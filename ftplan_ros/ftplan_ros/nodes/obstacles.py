@@ -117,8 +117,9 @@ class ObstacleSet:
         if len(self._waiting) > _MAX_WAITING:
             del self._waiting[0]
             first, first_lost = self._waiting[0]
-            self._waiting[0] = (first, first_lost or f'more than {_MAX_WAITING} obstacle '
-                                'updates arrived before the robot: the oldest were dropped')
+            self._waiting[0] = (first, first_lost or f'obstacle updates were lost (more than '
+                                f'{_MAX_WAITING} arrived before the robot: the oldest were '
+                                'dropped)')
 
     def _apply(self, msg: MarkerArray, lost: str) -> None:
         self.lost = lost or self.lost
