@@ -301,7 +301,7 @@ class ExecutorNode(Node):
             self.locks = JointLocks(names)
             self.q = self._previous_q = None
         self.scene, self.names = scene, names
-        self.obstacle_topic.report_problems(problems)
+        self.obstacle_topic.report_rebase(problems)
 
     def _scene_changed(self, scene: Scene) -> None:
         """Take a new robot from /robot_description (stopping an execution under way)."""

@@ -56,17 +56,18 @@ class ObstacleTopic:
         """Apply one update, in the order received; name the updates lost before it."""
         number = info.get('publication_sequence_number')
         gap = self._streams.receive(number)
+        found = '' if gap is None else self._describe(gap)
         problem = ''
         with self._lock:
             was_lost = self.obstacles.lost
             try:
-                self.obstacles.update(msg, '' if gap is None else self._describe(gap))
+                self.obstacles.update(msg, found)
             except ValueError as error:
                 problem = str(error)
             lost = self.obstacles.lost
             values = self._values(number)
             waiting = self.obstacles.pending
-        self._report(problem, lost, was_lost, waiting, values)
+        self._report(problem, lost or (found if waiting else ''), was_lost, waiting, values)
         if self._on_update is not None and (not problem or lost != was_lost):
             self._on_update()
 
@@ -89,6 +90,7 @@ class ObstacleTopic:
 
     def _report(self, problem: str, lost: str, was_lost: str, waiting: int,
                 values: dict) -> None:
+        """Report an update: refused, or with updates lost (found now or before), or applied."""
         kept = values['obstacles']
         if problem:
             self._diagnostics.report(
@@ -113,7 +115,15 @@ class ObstacleTopic:
                 f'{OBSTACLES}: this middleware does not number its messages, so lost '
                 'obstacle updates cannot be detected', once=True)
 
-    def report_problems(self, problems: list[str]) -> None:
-        """Report the marker arrays that waited for the robot and were refused."""
+    def report_rebase(self, problems: list[str]) -> None:
+        """Report what came of the updates that waited for the robot (ObstacleSet.rebase).
+
+        `problems` are the marker arrays refused; updates lost among them make the set
+        incomplete, reported like a gap.
+        """
         for problem in problems:
             self._diagnostics.rejected('obstacles', f'ignored obstacle markers: {problem}')
+        lost = self.obstacles.lost
+        if lost:
+            self._diagnostics.report('obstacles', 'ERROR', f'{lost}: {FULL_SET_FIX}',
+                                     self._values(None), log=True)

@@ -324,7 +324,7 @@ class PlannerNode(Node):
             self.cache = ManifoldCache()
             self._joint_state = None
             early, self._early_joint_state = self._early_joint_state, None
-        self.obstacle_topic.report_problems(problems)
+        self.obstacle_topic.report_rebase(problems)
         if early is not None:
             self.joint_state_callback(early)
 

@@ -299,7 +299,7 @@ class SimNode(Node):
         self.motion = None
         self.locked = {}
         self._clear_counters()
-        self.obstacle_topic.report_problems(problems)
+        self.obstacle_topic.report_rebase(problems)
         self._check_clearance(self.q[None, :])
         self.publish_joint_state(np.zeros(len(self.names)))
         self.report('at the initial configuration', log=True)
