@@ -135,6 +135,17 @@ def test_the_sim_motion_sweeps_through_every_waypoint_it_passes():
     assert np.allclose(swept, [[1.0, 0.5], [1.0, 1.0], [1.0, 1.0]]) and finished
 
 
+def test_the_sim_motion_puts_a_moment_of_its_command_on_its_own_clock():
+    """Commanded 1 s a step from stamp 100 s, started at sim time 10 s; the sim slowed the
+    second step to 3 s: a moment of the command maps to where the arm is then."""
+    motion = Motion(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), np.array([0.0, 1.0, 4.0]),
+                    start=10.0, commanded=np.array([0.0, 1.0, 2.0]), stamp_ns=100 * 10**9)
+    assert motion.time_of(100_500_000_000) == pytest.approx(10.5)
+    assert motion.time_of(101_500_000_000) == pytest.approx(12.5)
+    assert np.allclose(motion.sample(motion.time_of(101_500_000_000))[0], [1.0, 0.5])
+    assert motion.time_of(99 * 10**9) == 10.0 and motion.time_of(200 * 10**9) == 14.0
+
+
 def test_the_default_initial_configuration_is_at_the_task_start_and_clear():
     scene = load_scene(SCENES / 'fig3a.yaml')
     theta = default_initial_configuration(scene)
