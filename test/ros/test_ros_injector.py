@@ -79,6 +79,27 @@ def test_a_fraction_drill_is_scheduled_when_the_nominal_command_reaches_it():
                            np.zeros(3, bool)) is None
 
 
+@pytest.mark.parametrize('drill, locked, phase, landed, missed', [
+    ('joint2@0.5', 'joint2', 'nominal', 0.5, ''),
+    ('joint2@0.5', 'joint2', 'nominal', 0.519, ''),
+    ('joint2@0.5', 'joint2', 'nominal', 0.479, 'lock landed at 47.9%, asked 50.0%'),
+    ('joint2@0.5', 'joint2', 'nominal', 0.585, 'lock landed at 58.5%, asked 50.0%'),
+    ('joint2@0.9', 'joint2', 'nominal', 1.0, 'lock landed at 100.0%: after the motion, '
+                                             'asked 90.0%'),
+    ('joint2@0.99', 'joint2', 'nominal', 1.0, ''),
+    ('joint2@0.5', '', '', float('nan'), 'no lock during the execution'),
+    ('joint2@0.5', 'joint3', 'nominal', 0.5, 'joint3 locked, not joint2'),
+    ('joint2@0.0', 'joint2', 'approaching', float('nan'),
+     'the lock landed while approaching, not on the nominal path'),
+    ('joint2@0.5', 'joint2', 'nominal', float('nan'),
+     'the executor did not report where the lock landed'),
+    ('joint1@2.5s', 'joint1', 'approaching', float('nan'), ''),
+    ('joint1@60s', '', '', float('nan'), 'no lock during the execution'),
+])
+def test_a_drill_says_how_a_runs_lock_missed_it(drill, locked, phase, landed, missed):
+    assert parse_drill(drill, NAMES).missed(locked, phase, landed) == missed
+
+
 def test_lock_now_publishes_one_event_and_clears_itself(ros):
     injector = ros.make(InjectorNode)
     ros.probe.listen(JointState, '/ftplan/locked_joint')

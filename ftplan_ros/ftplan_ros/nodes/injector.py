@@ -100,6 +100,31 @@ class Drill:
         return f'{self.joint}@{self.seconds:.3g}s' if self.seconds is not None else \
             f'{self.joint}@{self.fraction:.3g}'
 
+    def missed(self, locked_joint: str, lock_phase: str, landed: float) -> str:
+        """Say how a run's lock missed this drill ('' when it was drilled as asked).
+
+        The arguments are the executor's report of the run: the joint that locked ('' for
+        none), the phase it locked in, and `landed`, the fraction of the nominal path
+        where the arm stood locked (NaN if not reported). A fraction drill must lock its
+        joint on the nominal path within DRILL_TOLERANCE of its fraction; a drill in
+        seconds must lock its joint during the execution.
+        """
+        if not locked_joint:
+            return 'no lock during the execution'
+        if locked_joint != self.joint:
+            return f'{locked_joint} locked, not {self.joint}'
+        if self.fraction is None:
+            return ''
+        if lock_phase != 'nominal':
+            return f'the lock landed while {lock_phase or "in an unknown phase"}, not on ' \
+                'the nominal path'
+        if not np.isfinite(landed):
+            return 'the executor did not report where the lock landed'
+        if abs(landed - self.fraction) <= DRILL_TOLERANCE:
+            return ''
+        after = ': after the motion' if landed >= 1.0 else ''
+        return f'lock landed at {landed:.1%}{after}, asked {self.fraction:.1%}'
+
 
 def parse_drill(text: str, joint_names: Sequence[str] | None) -> Drill:
     """Parse 'JOINT@FRACTION' (0..1) or 'JOINT@SECONDSs'; ValueError says what is wrong.
