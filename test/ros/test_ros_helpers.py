@@ -13,7 +13,8 @@ from ftplan_msgs_py import create_obstacle_markers
 from ftplan_ros.core import CollisionChecker, InputError, Obstacle, Task, load_scene, task_errors
 from ftplan_ros.core.angles import wrap_angle
 from ftplan_ros.core.approach import straight_move_ends
-from ftplan_ros.nodes.motion import progress_along, time_path
+from ftplan_ros.core.paths import point_at_fraction
+from ftplan_ros.nodes.motion import fraction_at_time, progress_along, time_at_fraction, time_path
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
     obstacle_from_shape,
@@ -50,6 +51,25 @@ def test_progress_along_a_path_also_across_whole_turns():
     turned = np.array([1.0 + 2 * np.pi, 0.5, 0.0])
     assert progress_along(path, turned, np.ones(3, bool)) == pytest.approx((0.75, 0.0))
     assert progress_along(path, turned)[1] > 6.0                 # not periodic: far away
+
+
+def test_fractions_and_times_along_a_timed_path_are_one_measure_and_inverse():
+    """The fraction of a timed path is of its length (as progress_along measures it), not of
+    its time or its points; a pause holds it; time_at_fraction gives the first time."""
+    path = np.array([[0.0, 0.0], [3.0, 4.0], [3.0, 4.0], [3.0, 10.0]])   # lengths 5, 0, 6
+    times = np.array([0.0, 1.0, 1.5, 4.5])
+    assert fraction_at_time(path, times, 0.5) == pytest.approx(2.5 / 11)
+    assert fraction_at_time(path, times, 1.2) == pytest.approx(5 / 11)       # the pause
+    assert fraction_at_time(path, times, 3.0) == pytest.approx(8 / 11)
+    assert (fraction_at_time(path, times, -1.0), fraction_at_time(path, times, 9.0)) == (0, 1)
+    assert time_at_fraction(path, times, 5 / 11) == pytest.approx(1.0)
+    assert time_at_fraction(path, times, 8 / 11) == pytest.approx(3.0)
+    assert (time_at_fraction(path, times, 0.0), time_at_fraction(path, times, 1.0)) == (0, 4.5)
+    for fraction in np.linspace(0.0, 1.0, 23):
+        moment = time_at_fraction(path, times, fraction)
+        assert fraction_at_time(path, times, moment) == pytest.approx(fraction)
+        assert progress_along(path, point_at_fraction(path, fraction))[0] == \
+            pytest.approx(fraction)
 
 
 def test_straight_moves_offer_both_ways_round_shortest_first():
@@ -113,6 +133,17 @@ def test_the_sim_motion_sweeps_through_every_waypoint_it_passes():
     assert np.allclose(motion.swept(10.2, 10.4)[0], [[0.2, 0.0], [0.4, 0.0]])
     swept, finished = motion.swept(11.5, 13.0)
     assert np.allclose(swept, [[1.0, 0.5], [1.0, 1.0], [1.0, 1.0]]) and finished
+
+
+def test_the_sim_motion_puts_a_moment_of_its_command_on_its_own_clock():
+    """Commanded 1 s a step from stamp 100 s, started at sim time 10 s; the sim slowed the
+    second step to 3 s: a moment of the command maps to where the arm is then."""
+    motion = Motion(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), np.array([0.0, 1.0, 4.0]),
+                    start=10.0, commanded=np.array([0.0, 1.0, 2.0]), stamp_ns=100 * 10**9)
+    assert motion.time_of(100_500_000_000) == pytest.approx(10.5)
+    assert motion.time_of(101_500_000_000) == pytest.approx(12.5)
+    assert np.allclose(motion.sample(motion.time_of(101_500_000_000))[0], [1.0, 0.5])
+    assert motion.time_of(99 * 10**9) == 10.0 and motion.time_of(200 * 10**9) == 14.0
 
 
 def test_the_default_initial_configuration_is_at_the_task_start_and_clear():

@@ -20,6 +20,12 @@ status has arrived on /ftplan/plan/info (plan_info.py). A call of /ftplan/execut
    from where the arm stopped with the joints left (`path_to_goal`), when there is one;
 4. done (at the goal) or failed (with the reason).
 
+A lock event stamped ahead of where the arm is on its command (a drill's scheduled
+failure, injector.py) takes effect when /joint_states show the arm at the point the
+command puts it at that moment (the sim locks it exactly there), not on arrival; any
+other takes effect at once. `lock_progress` in the status is where the arm stood locked,
+as a fraction of the nominal path's length (motion.py): where the lock landed.
+
 A lock of a joint the plan does not tolerate (the planner names the tolerated joints in
 its plan status) is handled the same way: a recovery path the core
 finds in S_F is safe and is followed; without one the arm stays stopped and the
@@ -44,13 +50,14 @@ fail it: an obstacle may have come into its way unseen. A second lock in one exe
 stops the arm safely too. When /joint_states stops for `joint_state_timeout` during an
 execution, a watchdog commands a stop and fails it.
 
-Commands go out on /ftplan/joint_command as JointTrajectory (strictly increasing times,
-the first point one step ahead of where the arm is), so a ros2_control
-joint_trajectory_controller can take them (remap the topic); an empty trajectory asks
-for a stop. Every state change, and the progress along the nominal path, is reported on
-/diagnostics as 'ftplan_executor: execution'. A lock before or after the nominal phase,
-a lock of an unknown joint and any malformed input (a joint state stamped before the
-epoch, a lock angle away from where the joint is) are logged and reported, never fatal.
+Commands go out on /ftplan/joint_command as JointTrajectory (stamped with the moment they
+start, strictly increasing times, the first point one step ahead of where the arm is),
+so a ros2_control joint_trajectory_controller can take them (remap the topic); an empty
+trajectory asks for a stop. Every state change, and the progress along the nominal path,
+is reported on /diagnostics as 'ftplan_executor: execution'. A lock before or after the
+nominal phase, a lock of an unknown joint and any malformed input (a joint state stamped
+before the epoch, a lock angle away from where the joint is) are logged and reported,
+never fatal.
 """
 
 from __future__ import annotations
@@ -62,6 +69,7 @@ from enum import StrEnum
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.duration import Duration
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -69,6 +77,7 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import (
+    LockedJoint,
     create_joint_trajectory,
     read_diagnostic_status,
     read_failure_surface,
@@ -96,13 +105,14 @@ from .locks import (
     lock_angle_problem,
     read_lock_event,
 )
-from .motion import progress_along, time_path
+from .motion import fraction_at_time, progress_along, time_at_fraction, time_path
 from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
 from .params import (
     add_validators,
     check_startup_parameters,
     declare,
     destroyed_if_start_fails,
+    non_negative,
     positive,
 )
 from .plan_info import PlanInfos, join_names, read_plan_info
@@ -127,6 +137,11 @@ from .topics import (
 )
 
 _REJECTION_REPORT_PERIOD = 1.0  # [s] a stream of bad joint states: one report per period
+# [s] The sim stops at a scheduled lock's point of the command, read from the command's
+# message, whose times are rounded to nanoseconds: the moment of the arm's position may
+# differ from the lock's by a few nanoseconds.
+_DUE_TOLERANCE = 1e-6
+_LONGEST_LEAD = 1.0  # [s] of the nominal path's command: a longer pause would only stall
 
 
 class State(StrEnum):
@@ -161,6 +176,9 @@ class Execution:
     surface: FailureSurface          # the plan's S_F shifted by whole turns to the arm's lift
     started: float                   # monotonic [s]
     command: np.ndarray | None = None     # (k, n) path being commanded, from where it began
+    command_times: np.ndarray | None = None  # (k,) [s] of the command, from its stamp
+    command_stamp_ns: int = 0        # ROS time [ns] the command starts: its stamp
+    scheduled_lock: tuple[LockedJoint, int, int] | None = None  # event, joint, stamp [ns]
     progress: float = 0.0            # fraction of the nominal path's length done
     locked_joint: int | None = None
     lock_received: float | None = None
@@ -254,6 +272,10 @@ class ExecutorNode(Node):
         declare(self, 'approach_time', 1.0,
                 'Budget [s] of each of the three RRT-Connect attempts of an approach (or, '
                 'after a lock during it, of a path to the goal with the joints left).')
+        declare(self, 'nominal_lead', 0.05,
+                'Seconds from sending the command of the nominal path to its start (its '
+                'stamp): time for a drill\'s lock, scheduled on that command (injector), to '
+                'reach the arm before it moves. At most 1 s.')
         declare(self, 'status_rate', 10.0,
                 'Rate [Hz] of the progress reports on /diagnostics while executing (1 Hz when '
                 'idle).', read_only=True)
@@ -262,6 +284,8 @@ class ExecutorNode(Node):
             'stopped_tolerance', 'stop_timeout', 'stop_settle_time', 'start_timeout',
             'status_rate', 'joint_state_timeout', 'stall_timeout', 'lock_angle_tolerance',
             'approach_time')}
+        validators['nominal_lead'] = lambda value: non_negative(value) or (
+            None if value <= _LONGEST_LEAD else f'must be at most {_LONGEST_LEAD} s, got {value}')
         check_startup_parameters(self, validators)
         add_validators(self, validators)
 
@@ -580,14 +604,15 @@ class ExecutorNode(Node):
 
     def _begin_nominal(self) -> None:
         ex = self.execution
-        if self._command(ex.nominal):
+        if self._command(ex.nominal, float(self.get_parameter('nominal_lead').value)):
             self._set_state(State.NOMINAL, 'following the nominal path')
 
-    def _command(self, path: np.ndarray) -> bool:
+    def _command(self, path: np.ndarray, lead: float = 0.0) -> bool:
         """Command `path` (k, n), whose first point is where the arm is; False if refused.
 
-        A path that would move a locked joint is never published: the arm is stopped and
-        the execution fails instead (that would be a bug of the executor).
+        The command starts `lead` [s] after now: its stamp. A path that would move a
+        locked joint is never published: the arm is stopped and the execution fails
+        instead (that would be a bug of the executor).
         """
         moved = self.locks.moved(path)
         if moved:
@@ -596,11 +621,13 @@ class ExecutorNode(Node):
                        'is stopped (please report)')
             return False
         speed = float(self.get_parameter('max_joint_speed').value)
-        times = time_path(path, speed)
-        self.execution.command = path
-        self.execution.commanded = time.monotonic()
-        self.command_publisher.publish(
-            create_joint_trajectory(self.names, path[1:], times[1:]))
+        ex = self.execution
+        stamp = self.get_clock().now() + Duration(nanoseconds=round(lead * 1e9))
+        ex.command, ex.command_times = path, time_path(path, speed)
+        ex.command_stamp_ns = stamp.nanoseconds
+        ex.commanded = time.monotonic()
+        self.command_publisher.publish(create_joint_trajectory(
+            self.names, path[1:], ex.command_times[1:], stamp.to_msg()))
         return True
 
     def _stop(self) -> None:
@@ -652,6 +679,11 @@ class ExecutorNode(Node):
         arrival = float(self.get_parameter('arrival_tolerance').value)
         if self.state == State.NOMINAL:
             ex.progress, _ = progress_along(ex.nominal, q)
+        if ex.scheduled_lock is not None and self._lock_due(ex.scheduled_lock[2], q):
+            event, joint, _ = ex.scheduled_lock
+            ex.scheduled_lock = None
+            self._take_lock(event, joint)
+            return
         if ex.command is None:
             if ex.locked_joint is not None:
                 # Joint states sent before the lock may still be queued (the executor takes
@@ -692,14 +724,50 @@ class ExecutorNode(Node):
         self._set_state(State.DONE, f'reached the goal ({how}), error {error}')
 
     def locked_joint_callback(self, msg: JointState) -> None:
-        """Handle a failure: during the nominal phase, stop and prepare the recovery."""
+        """Handle a failure: stop and prepare the recovery, when the lock takes effect.
+
+        That is at once, or, for an event stamped ahead of where the arm is on its command
+        (a drill's scheduled failure), when the arm gets there (`_track`).
+        """
         found = read_lock_event(
             msg, None if self.scene is None else self.names, self.source.waiting,
             lambda why, name: self.diagnostics.rejected(
                 'input', why, None if name is None else {'joint': name}))
         if found is None:
             return
-        event, joint = found
+        event, joint, stamp_ns = found
+        ex = self.execution
+        if self.state in ACTIVE and ex.scheduled_lock is None and \
+                not self._lock_due(stamp_ns, self.q):
+            ex.scheduled_lock = (event, joint, stamp_ns)
+            self.report_status(f'{event.name} locks at {self._fraction_at(stamp_ns):.1%} of '
+                               f'the command under way ({self.state.value}): scheduled',
+                               log=True)
+            return
+        self._take_lock(event, joint)
+
+    def _lock_due(self, stamp_ns: int, q: np.ndarray | None) -> bool:
+        """Whether a lock stamped `stamp_ns` [ns] has taken effect with the arm at q (n,).
+
+        It has once the arm is where its command puts it at that moment, and at once
+        without a command under way (or a joint state). Not by the clock: an arm that
+        took the command late gets there late.
+        """
+        ex = self.execution
+        if ex.command is None or q is None:
+            return True
+        progress, _ = progress_along(ex.command, q)
+        reached = time_at_fraction(ex.command, ex.command_times, progress)
+        return reached >= (stamp_ns - ex.command_stamp_ns) * 1e-9 - _DUE_TOLERANCE
+
+    def _fraction_at(self, stamp_ns: int) -> float:
+        """Return the fraction of the command under way that it commands by `stamp_ns` [ns]."""
+        ex = self.execution
+        return fraction_at_time(ex.command, ex.command_times,
+                                (stamp_ns - ex.command_stamp_ns) * 1e-9)
+
+    def _take_lock(self, event: LockedJoint, joint: int) -> None:
+        """Take the lock of `joint`: remember it; during an execution, stop the arm to recover."""
         current = None if self.q is None else float(self.q[joint])
         problem = lock_angle_problem(event.name, event.angle, current,
                                      bool(self.scene.robot.periodic[joint]),
