@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -35,6 +36,7 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.srv import GetPlan
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
@@ -68,6 +70,9 @@ from .nodes.topics import (
 _POLL = 0.02  # [s] longest single wait of the client's executor
 _STATUS_LOG_SIZE = 500  # recent /diagnostics statuses kept
 _STATUS_WAIT = 1.0  # [s] longest wait for the planner's status of a plan once it answered
+# The planner's latched results of this many recent plans are kept: plans answered side by
+# side (plan workers) publish theirs back to back, and the client's own may not be the last.
+_PLAN_HISTORY = 20
 
 
 class Outcome(Enum):
@@ -147,16 +152,18 @@ class PlanClient(Node):
         self._statuses: dict[str, DiagnosticReading] = {}
         self._status_log: list[tuple[int, DiagnosticReading]] = []
         self._status_seq = 0
-        self._start: JointState | None = None
-        self._trajectory: JointTrajectory | None = None
-        self._surface: Float64MultiArray | None = None
+        # The latched results of recent plans, newest last.
+        self._starts: deque[JointState] = deque(maxlen=_PLAN_HISTORY)
+        self._trajectories: deque[JointTrajectory] = deque(maxlen=_PLAN_HISTORY)
+        self._surfaces: deque[Float64MultiArray] = deque(maxlen=_PLAN_HISTORY)
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, self._diagnostics_callback, 50)
-        self.create_subscription(JointState, START_CONFIGURATION,
-                                 lambda msg: setattr(self, '_start', msg), LATCHED_QOS)
-        self.create_subscription(JointTrajectory, TRAJECTORY,
-                                 lambda msg: setattr(self, '_trajectory', msg), LATCHED_QOS)
-        self.create_subscription(Float64MultiArray, FAILURE_SURFACE,
-                                 lambda msg: setattr(self, '_surface', msg), LATCHED_QOS)
+        results_qos = QoSProfile(depth=_PLAN_HISTORY, durability=LATCHED_QOS.durability,
+                                 reliability=LATCHED_QOS.reliability)
+        for msg_type, topic, kept in ((JointState, START_CONFIGURATION, self._starts),
+                                      (JointTrajectory, TRAJECTORY, self._trajectories),
+                                      (Float64MultiArray, FAILURE_SURFACE, self._surfaces)):
+            self.create_subscription(msg_type, topic, lambda msg, kept=kept: kept.append(msg),
+                                     results_qos)
         self._executor = SingleThreadedExecutor(context=self.context)
         self._executor.add_node(self)
 
@@ -316,26 +323,30 @@ class PlanClient(Node):
         problems = []
 
         def complete() -> bool:
-            start, trajectory, surface = self._start, self._trajectory, self._surface
-            if start is None or trajectory is None or surface is None or \
-                    stamp_key(start.header.stamp) != key or \
-                    stamp_key(trajectory.header.stamp) != key:
+            start = _stamped(self._starts, key)
+            trajectory = _stamped(self._trajectories, key)
+            if start is None or trajectory is None:
                 return False
             names = tuple(trajectory.joint_names)
             try:
                 positions, times = read_joint_trajectory(trajectory, names)
-                paths = read_failure_surface(surface)
                 theta_s = read_joint_state(start, names)
             except ValueError as error:
                 problems[:] = [f'unreadable plan topics: {error}']
                 return False
-            if paths.shape[1:] != positions.shape:
-                return False
-            matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
-            if len(matches) == 0:
-                return False
-            found.append((names, theta_s, positions, times, paths, int(matches[0])))
-            return True
+            for surface in reversed(self._surfaces):  # the newest S_F holding the path
+                try:
+                    paths = read_failure_surface(surface)
+                except ValueError as error:
+                    problems[:] = [f'unreadable plan topics: {error}']
+                    continue
+                if paths.shape[1:] != positions.shape:
+                    continue
+                matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
+                if len(matches):
+                    found.append((names, theta_s, positions, times, paths, int(matches[0])))
+                    return True
+            return False
 
         if self.spin_until(complete, timeout):
             return found[0]
@@ -387,6 +398,12 @@ class PlanClient(Node):
         if response is None:
             return False, f'no answer from {service} within {timeout} s'
         return response.success, response.message
+
+
+def _stamped(messages: deque, key: str):
+    """Return the newest message of `messages` stamped `key` ('sec.nanosec'), else None."""
+    return next((msg for msg in reversed(messages) if stamp_key(msg.header.stamp) == key),
+                None)
 
 
 def _plan_time(status: DiagnosticReading | None) -> float:
