@@ -1,5 +1,6 @@
 """Plan workers without ROS: a job plans in a worker as it plans here, errors come back, close."""
 
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +44,14 @@ def test_a_job_the_core_refuses_raises_its_input_error_and_the_worker_stays(pool
     assert refused.value.field == 'task.goal'
     [pid] = pool.pids
     assert pool.run(job)[0].feasible and pool.pids == (pid,)
+
+
+def test_a_job_that_does_not_pickle_is_refused_and_the_pool_keeps_its_worker(pool):
+    job = _job('fig3a')
+    unsendable = PlanJob(job.scene, threading.Lock(), PlanSettings(), 60.0)   # a lock for q
+    with pytest.raises(TypeError, match='cannot pickle'):
+        pool.run(unsendable)
+    assert pool.run(job)[0].feasible
 
 
 def test_close_ends_every_worker():

@@ -212,6 +212,9 @@ class PlanPool:
             self._replace(worker)
             raise PlanWorkerError(f'plan worker {worker.pid} {lost} while planning; a new '
                                   'worker takes its place') from None
+        except BaseException:  # a message that does not (un)pickle: a fresh worker, in doubt
+            self._replace(worker)
+            raise
         worker.robots.add(key)
         self._give_back(worker)
         kind, *details = reply
