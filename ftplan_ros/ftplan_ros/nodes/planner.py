@@ -142,7 +142,8 @@ MARKER_WEB_SIZE = 40  # paths and waypoints of S_F drawn at most (~6000 marker p
 # [m] GetPlan.tolerance is a float32: below its smallest normal number a tolerance has
 # lost its digits on the way (and one below 1.4e-45 arrives as 0, the scene's).
 SMALLEST_TOLERANCE = float(np.finfo(np.float32).tiny)
-DEFAULT_PLAN_WORKERS = 0  # README, "Plans side by side": on 2 shared cores 2 workers did not pay
+# Plan in the node's process (README, "Plans side by side": workers pay little on shared cores).
+DEFAULT_PLAN_WORKERS = 0
 
 
 class RequestError(ValueError):
