@@ -22,7 +22,7 @@ def test_the_core_the_cli_and_the_plan_workers_never_import_rclpy():
     modules = [f'ftplan_ros.core.{m.name}' for m in pkgutil.iter_modules(ftplan_ros.core.__path__)]
     modules += ['ftplan_ros.cli', 'ftplan_ros.bench', 'ftplan_ros.figures']
     # The plan workers' fork server imports these: no ROS threads in the processes it forks.
-    modules += ['ftplan_ros.nodes.plan_pool', 'ftplan_ros.nodes.plan_jobs']
+    modules += [f'ftplan_ros.nodes.plan_{name}' for name in ('pool', 'worker', 'jobs')]
     modules += [f'ftplan_ros.study.{m.name}'
                 for m in pkgutil.iter_modules(ftplan_ros.study.__path__)]
     code = ('import importlib, sys\n'

@@ -26,7 +26,7 @@ PlanJob (plan_jobs.py) in one of its worker processes instead and returns what
 - `close()` ends every worker. A worker whose node died sees its connection close:
   at once when idle, at the next stage of its search when busy.
 
-No rclpy here: the fork server imports this module.
+The worker's side is plan_worker.py. No rclpy here either: the fork server imports it.
 """
 
 from __future__ import annotations
@@ -38,19 +38,17 @@ import queue
 import signal
 import threading
 import time
-import traceback
 from collections import OrderedDict
-from dataclasses import replace
-from multiprocessing.connection import Connection, wait
+from multiprocessing.connection import wait
 
-from ftplan_ros.core import InputError, ManifoldCache, PlanResult, Robot, load_kernels
+from ftplan_ros.core import InputError, PlanResult, Robot
 from ftplan_ros.core.approach import Approach
 
-from .plan_jobs import PlanJob, PlanTimeout, run_job
+from .plan_jobs import PlanJob, PlanTimeout
+from .plan_worker import ROBOTS_KEPT, serve
 
 OVERRUN_GRACE = 2.0     # [s] a worker's time past the deadline to stop at its next stage
 WARM_ALLOWANCE = 120.0  # [s] more for a worker that loads (or compiles) a robot's kernels
-ROBOTS_KEPT = 4         # robots a worker (and the pool's key table) keeps, most recent
 CLOSE_WAIT = 5.0        # [s] longest wait for the workers to exit at close
 START_ATTEMPTS = 3      # a worker that dies as it starts is started again, this often
 _log = logging.getLogger(__name__)
@@ -138,7 +136,7 @@ class PlanPool:
             raise ValueError(f'a plan pool needs at least 1 worker, got {size}')
         self.size = size
         self._context = multiprocessing.get_context('forkserver')
-        self._context.set_forkserver_preload([__name__])
+        self._context.set_forkserver_preload([serve.__module__])
         self._lock = threading.Lock()
         self._idle: queue.SimpleQueue[_Worker] = queue.SimpleQueue()
         self._workers: list[_Worker] = []
@@ -327,69 +325,3 @@ class PlanPool:
                     self._robot_keys.popitem(last=False)
             self._robot_keys.move_to_end(robot)
             return key
-
-
-# The worker process ---------------------------------------------------------------------
-
-class _Planner:
-    """A worker's state: the robots it holds by key, its manifold cache and the seed."""
-
-    def __init__(self, connection: Connection):
-        self.connection = connection
-        self.robots: OrderedDict[int, Robot] = OrderedDict()
-        self.cache = ManifoldCache()
-        self.seed: int | None = None
-
-    def robot(self, key: int, robot: Robot) -> Robot:
-        """Return the worker's robot of `key` (`robot` the first time, its kernels loaded)."""
-        if key not in self.robots:
-            try:
-                load_kernels(robot)
-            except Exception:  # noqa: BLE001 - a warm-up that fails only costs time
-                _log.warning(f'loading the kernels failed:\n{traceback.format_exc()}')
-            self.robots[key] = robot
-            if len(self.robots) > ROBOTS_KEPT:
-                self.robots.popitem(last=False)
-        self.robots.move_to_end(key)
-        return self.robots[key]
-
-    def plan(self, key: int, job: PlanJob) -> tuple:
-        """Plan `job` with the worker's own robot of `key`; return the reply."""
-        robot = self.robot(key, job.scene.robot)
-        if job.settings.seed != self.seed:  # the cached manifolds were traced with the old one
-            self.cache, self.seed = ManifoldCache(), job.settings.seed
-        job = replace(job, scene=replace(job.scene, robot=robot))
-        try:
-            result, approach = run_job(job, self.cache, self.connection.poll)
-        except PlanTimeout as stop:
-            return ('timeout', str(stop))
-        except InputError as error:
-            return ('refused', error.field, error.problem)
-        except Exception as error:  # noqa: BLE001 - the node answers with it
-            return ('error', repr(error), traceback.format_exc())
-        return ('done', result, approach)
-
-
-def serve(connection: Connection) -> None:
-    """Plan the jobs that come on `connection` until it closes (a worker process's main).
-
-    Each message has one reply: ('warm', key, robot) loads the robot's kernels and is
-    answered ('ready',); ('plan', key, job) is answered ('done', result, approach),
-    ('timeout', line), ('refused', field, problem) or ('error', repr, traceback). The
-    pool sends a message only when the worker is idle, so anything readable while it
-    plans is the node hanging up (`connection.poll()` is true at EOF too): the search
-    stops at its next stage.
-    """
-    # Ctrl-C in a terminal reaches the whole process group: the node stops its workers.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    planner = _Planner(connection)
-    try:
-        while True:
-            kind, key, payload = connection.recv()
-            if kind == 'warm':
-                planner.robot(key, payload)
-                connection.send(('ready',))
-            else:
-                connection.send(planner.plan(key, payload))
-    except (EOFError, OSError):  # the node closed the connection, or died
-        return
