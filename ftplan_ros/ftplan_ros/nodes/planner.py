@@ -40,22 +40,26 @@ collision-free joint move reaches (core/approach.py), and publishes that approac
 and stamped like the plan, on /ftplan/plan/approach (no points: none found, or no joint
 state); the status says how it goes (`approach`). The approach is not failure-tolerant.
 
-Requests wait in a queue of SERVICE_QUEUE_DEPTH (qos.py) and are planned one at a time;
-`plan_timeout` [s] bounds each: the search stops at its next stage past it and the
-request is answered with an empty Path and the reason.
+Requests wait in a queue of SERVICE_QUEUE_DEPTH (qos.py). With `plan_workers` = 0 they
+are planned one at a time in the node's process; with N >= 1, N at a time in N worker
+processes (plan_pool.py), a worker that crashes failing its request only. `plan_timeout`
+[s] bounds each: the search stops at its next stage past it (a worker still busy
+OVERRUN_GRACE later is stopped) and the request is answered with an empty Path and the
+reason.
 
 A scene file without a robot takes it from /robot_description (scene_source.py); until
 then every request is refused with "waiting for /robot_description".
 
-Planning runs in its own callback group, so joint states and obstacles keep flowing
-while it works on a MultiThreadedExecutor.
+Planning runs in its own callback group (as many callbacks at once as there are workers),
+so joint states and obstacles keep flowing while it works on a MultiThreadedExecutor.
 """
 
 from __future__ import annotations
 
+import os
 import threading
-import time
 import traceback
+from collections import deque
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -86,16 +90,13 @@ from ftplan_msgs_py import (
 from ftplan_ros.core import (
     InputError,
     ManifoldCache,
-    PlannerOptions,
     PlanResult,
     Robot,
     Scene,
     Task,
-    VerificationOptions,
     load_kernels,
-    plan,
 )
-from ftplan_ros.core.approach import Approach, ApproachOptions, plan_from
+from ftplan_ros.core.approach import Approach
 from ftplan_ros.core.free_components import PROOF_GRIDS, START_GRIDS
 from ftplan_ros.core.planner import check_plannable
 from ftplan_ros.core.robot import robot_digest
@@ -120,10 +121,12 @@ from .params import (
     positive,
 )
 from .plan_info import join_names, plan_info_values
+from .plan_jobs import PlanJob, PlanSettings, PlanTimeout, run_job
+from .plan_pool import PlanPool, PlanWorkerError
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
 from .scene_source import SceneSource
-from .spinning import run_node
+from .spinning import BoundedCallbackGroup, run_node
 from .tasks import (
     bind_task_kind,
     check_task_kind,
@@ -153,6 +156,8 @@ MARKER_WEB_SIZE = 40  # paths and waypoints of S_F drawn at most (~6000 marker p
 # [m] GetPlan.tolerance is a float32: below its smallest normal number a tolerance has
 # lost its digits on the way (and one below 1.4e-45 arrives as 0, the scene's).
 SMALLEST_TOLERANCE = float(np.finfo(np.float32).tiny)
+# Plan in the node's process (README, "Plans side by side": workers pay little on shared cores).
+DEFAULT_PLAN_WORKERS = 0
 
 
 class RequestError(ValueError):
@@ -163,14 +168,11 @@ class StaleInputError(Exception):
     """The obstacles or the robot are not those published (updates lost, robot replaced)."""
 
 
-class PlanTimeout(Exception):  # noqa: N818 - a stop signal, not an error of the caller
-    """Raised from the core's progress hook once a request has used up `plan_timeout`."""
-
-
 class PlannerNode(Node):
     """Serve GetPlan with the core planner over the scene plus the obstacle topic."""
 
     def __init__(self, **kwargs):
+        self.pool: PlanPool | None = None  # before anything that may fail: destroy_node ends it
         with destroyed_if_start_fails(self):
             super().__init__(PLANNER_NODE, **kwargs)
             self.diagnostics = Diagnostics(self)
@@ -183,15 +185,24 @@ class PlannerNode(Node):
             self._joint_state: np.ndarray | None = None
             self._joint_state_problem = 'no joint state received yet on /joint_states'
             self._early_joint_state: JointState | None = None  # arrived before the robot
-            self._pending_results: tuple | None = None
+            self._pending_results: deque[tuple] = deque()  # plans whose results go out next
             self._pending_markers: tuple | None = None
             self.source = SceneSource(self, self.diagnostics, self._scene_changed)
             self._declare_parameters()
+            workers = self.get_parameter('plan_workers').value
+            self.pool = PlanPool(workers) if workers else None
             if self.source.scene is not None:
                 self._check_scene_parameters(self.source.scene)  # a bad one stops the start
                 self._use_scene(self.source.scene)
             self._create_interfaces()
-            self.get_logger().info(f'serving {PLAN_SERVICE}')
+            self.get_logger().info(f'serving {PLAN_SERVICE}' + (
+                f' with {workers} plan workers' if workers else ''))
+
+    def destroy_node(self) -> None:
+        """End the plan workers, then the node."""
+        if self.pool is not None:
+            self.pool.close()
+        super().destroy_node()
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,
@@ -215,8 +226,11 @@ class PlannerNode(Node):
                       '`tolerate`, else every joint).')
         declare(self, 'plan_timeout', 30.0,
                 'Longest a request may plan [s]; past it the search stops at its next stage '
-                'and the request is refused with the reason (requests wait in a queue, one '
-                'planned at a time).')
+                'and the request is refused with the reason.')
+        declare(self, 'plan_workers', DEFAULT_PLAN_WORKERS,
+                'Worker processes that plan requests side by side (read-only), at most one '
+                'per core; 0: one request at a time in the node\'s process. Requests past '
+                'them wait in a queue.', read_only=True)
         declare(self, 'approach', True,
                 'Plan for the arm where it stands: prefer a theta_s reachable from the '
                 'latest joint state along M_s^F, else by a joint move, and publish the '
@@ -230,6 +244,7 @@ class PlannerNode(Node):
                 'narrower gaps but takes longer and more memory (384: about 1 s and 0.4 GB).')
         validators = {'max_joint_speed': positive, 'margin': non_negative,
                       'seed': non_negative, 'plan_timeout': positive,
+                      'plan_workers': _check_plan_workers,
                       'approach_time': positive,
                       'approach_proof_cells': _check_proof_cells,
                       'joint_space_frame': lambda v: None if v else 'must not be empty',
@@ -253,7 +268,7 @@ class PlannerNode(Node):
         self.approach_publisher = self.create_publisher(JointTrajectory, APPROACH, LATCHED_QOS)
         self.markers_publisher = self.create_publisher(MarkerArray, PLAN_MARKERS, LATCHED_QOS)
         # Planning is slow: its own group keeps the subscriptions flowing meanwhile.
-        self.plan_group = MutuallyExclusiveCallbackGroup()
+        self.plan_group = BoundedCallbackGroup(self.pool.size if self.pool else 1)
         self.plan_service = self.create_service(
             GetPlan, PLAN_SERVICE, self.plan_callback, qos_profile=SERVICE_QOS,
             callback_group=self.plan_group)
@@ -313,11 +328,18 @@ class PlannerNode(Node):
         return bind_task_kind(scene.robot, self.get_parameter('task_kind').value)
 
     def _use_scene(self, scene: Scene) -> None:
-        """Plan with `scene` from now on (its robot is new: forget the old joint state)."""
+        """Plan with `scene` from now on (its robot is new: forget the old joint state).
+
+        Whoever plans (the workers, else this process) loads the robot's kernels first.
+        """
         try:
-            load_kernels(self._task_robot(scene))
+            robot = self._task_robot(scene)
         except InputError:
-            load_kernels(scene.robot)
+            robot = scene.robot
+        if self.pool is not None:
+            self.pool.use_robot(robot)
+        else:
+            load_kernels(robot)
         with self._lock:
             problems = self._obstacles.rebase(scene)
             self.scene = scene
@@ -394,7 +416,7 @@ class PlannerNode(Node):
             task = scene.task
             values.update(plan_info_values(scene.robot, scene.obstacles, task, [
                 scene.robot.joint_names[i] for i in scene.tolerated_joints]))
-            result, approach = self._plan(scene, q, time.monotonic() + timeout)
+            result, approach = self._plan(scene, q, timeout)
             self._check_robot_kept(values['robot'])
         except (InputError, RequestError) as error:
             self._report_failure(f'bad plan request: {error}', values)
@@ -406,6 +428,10 @@ class PlannerNode(Node):
             self._report_failure(f'no answer within plan_timeout = {timeout:g} s: the search '
                                  'was stopped; raise plan_timeout or simplify the request',
                                  values)
+            return response
+        except PlanWorkerError as error:
+            self.get_logger().error(traceback.format_exc())
+            self._report_failure(f'internal planner error: {error}', values, 'ERROR')
             return response
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             self.get_logger().error(traceback.format_exc())
@@ -422,26 +448,23 @@ class PlannerNode(Node):
         response.plan = self._publish_plan(scene, result, approach, stamp, values)
         return response
 
-    def _plan(self, scene: Scene, q: np.ndarray | None, deadline: float,
+    def _plan(self, scene: Scene, q: np.ndarray | None, timeout: float,
               ) -> tuple[PlanResult, Approach | None]:
         """Plan the request's scene; with q, for the arm standing there (plan_from).
 
-        Raises PlanTimeout at the first stage of the search that starts past `deadline`
-        (monotonic [s]).
+        In a plan worker when there are any, else here. Raises PlanTimeout at the first
+        stage of the search that starts `timeout` [s] after the planning did,
+        PlanWorkerError when the worker failed.
         """
-        def progress(line: str) -> None:
-            if time.monotonic() > deadline:
-                raise PlanTimeout(line)
-
-        margin = float(self.get_parameter('margin').value)
-        options = PlannerOptions(verification=VerificationOptions(margin=margin))
-        rng = np.random.default_rng(int(self.get_parameter('seed').value))
-        if q is None or not self.get_parameter('approach').value:
-            return plan(scene, options, rng, progress, cache=self.cache), None
-        reachable = plan_from(scene, q, options, rng, progress, self.cache, ApproachOptions(
-            margin=margin, rrt_time=float(self.get_parameter('approach_time').value),
-            proof_cells=int(self.get_parameter('approach_proof_cells').value)))
-        return reachable.result, reachable.approach
+        job = PlanJob(scene, q, PlanSettings(
+            margin=float(self.get_parameter('margin').value),
+            seed=int(self.get_parameter('seed').value),
+            approach=bool(self.get_parameter('approach').value),
+            approach_time=float(self.get_parameter('approach_time').value),
+            proof_cells=int(self.get_parameter('approach_proof_cells').value)), timeout)
+        if self.pool is not None:
+            return self.pool.run(job)
+        return run_job(job, self.cache)
 
     def _request_scene(self, request: GetPlan.Request) -> tuple[Scene, np.ndarray | None]:
         """Build the scene (static + topic obstacles) with the request's task, or raise.
@@ -539,18 +562,22 @@ class PlannerNode(Node):
         positions, orientations = end_effector_poses(scene.robot, result.nominal_path)
         path = create_path(positions, scene.frame_id, stamp, orientations)
         with self._lock:
-            self._pending_results = (scene, result, approach, stamp, values)
+            self._pending_results.append((scene, result, approach, stamp, values))
         self.results_timer.reset()
         return path
 
     def results_callback(self) -> None:
-        """Publish θ_s, the nominal trajectory and S_F of the last plan, latched; report it."""
-        self.results_timer.cancel()
+        """Publish the results of the plans answered since the last call, in order."""
+        self.results_timer.cancel()  # before taking them: a plan queued later re-arms it
         with self._lock:
-            pending, self._pending_results = self._pending_results, None
-        if pending is None:
-            return
-        scene, result, approach, stamp, values = pending
+            pending = list(self._pending_results)
+            self._pending_results.clear()
+        for plan_results in pending:
+            self._publish_results(*plan_results)
+
+    def _publish_results(self, scene: Scene, result: PlanResult, approach: Approach | None,
+                         stamp, values: dict) -> None:
+        """Publish θ_s, the nominal trajectory and S_F of a plan, latched; report it."""
         values.update(theta_s=format_vector(result.theta_s),
                       waypoints=len(result.nominal_path),
                       surface_paths=result.surface.paths.shape[0],
@@ -601,6 +628,15 @@ class PlannerNode(Node):
                 return
             self.diagnostics.report('markers', 'ERROR', f'could not publish markers: {error!r}',
                                     log=True)
+
+
+def _check_plan_workers(value) -> str | None:
+    """Validate `plan_workers`: 0 (plan in the node) up to one worker per core."""
+    cores = os.cpu_count() or 1
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= cores:
+        return (f'must be an integer from 0 (plan in the node\'s process) to {cores} (one '
+                f'worker per core of this machine), got {value!r}')
+    return None
 
 
 def _check_proof_cells(value) -> str | None:
