@@ -1,14 +1,23 @@
 """Self-collision exceptions from an SRDF: read as MoveIt reads them, checked against the URDF,
 and never exempting a chain link pair the SRDF does not exempt whole."""
 
+import itertools
+
 import pytest
 import yaml
-from descriptions import HOSTILE_XML, PANDA_SRDF, PANDA_URDF
+from descriptions import HOSTILE_XML, PANDA_SRDF, PANDA_URDF, srdf_documents
 from ftplan_testing import ROBOTS, robot_config
+from hypothesis import given, settings
 
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.scene import load_scene, robot_from_urdf
-from ftplan_ros.core.srdf import MAX_SRDF_BYTES, MAX_SRDF_ENTRIES, CollisionExceptions, read_srdf
+from ftplan_ros.core.srdf import (
+    MAX_SRDF_BYTES,
+    MAX_SRDF_ENTRIES,
+    CollisionExceptions,
+    chain_exceptions,
+    read_srdf,
+)
 from ftplan_ros.core.urdf_structure import read_urdf
 
 PANDA_LINKS = read_urdf(PANDA_URDF.read_text()).links
@@ -112,3 +121,20 @@ def test_a_bad_srdf_is_one_line_naming_the_entry(text, words):
     assert words in str(error.value), str(error.value)
     with pytest.raises(InputError, match='^robot.srdf: '):  # and so is the arm
         robot_from_urdf(PANDA_URDF.read_text(), 'panda_hand_tcp', srdf=text)
+
+
+@settings(max_examples=150, deadline=None, derandomize=True, database=None)
+@given(srdf_documents(list(PANDA_LINKS) + ['panda_link9', 'world']))
+def test_any_srdf_text_is_exceptions_or_an_input_error_and_exempts_only_whole_pairs(text):
+    """Random entries naming the Panda's links and others, missing attributes, odd tags."""
+    try:
+        exceptions = read_srdf(text, PANDA_LINKS)
+    except InputError as error:
+        assert error.field == 'robot.srdf' and '\n' not in str(error)
+        return
+    model = robot_config('panda').model
+    exempt = chain_exceptions(model, exceptions)
+    for a, b in itertools.combinations(sorted({item.link for item in model.shapes}), 2):
+        whole = all(exceptions.exempts(s.urdf_link, t.urdf_link) for s in model.shapes
+                    for t in model.shapes if (s.link, t.link) == (a, b))
+        assert ((a, b) in exempt) == whole

@@ -5,14 +5,19 @@ model" for the rest; each case here names what is wrong instead.
 """
 
 import re
+from collections import Counter
 
+import numpy as np
 import pytest
-from descriptions import CYCLE_JOINT, HOSTILE_XML, PANDA_URDF, panda_with
-from ftplan_testing import bot_urdf
+from descriptions import CYCLE_JOINT, HOSTILE_XML, PANDA_URDF, panda_with, urdf_documents
+from ftplan_testing import TETRAHEDRON, bot_urdf, write_binary_stl
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from ftplan_ros.core.description_xml import MAX_DEPTH, MAX_ELEMENTS
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.scene import robot_from_urdf
+from ftplan_ros.core.urdf import chain_from_urdf
 from ftplan_ros.core.urdf_structure import (
     MAX_GEOMETRIES,
     MAX_JOINTS,
@@ -201,3 +206,47 @@ def test_entity_expansion_is_refused_at_the_doctype():
         read_urdf(bomb)
     with pytest.raises(InputError, match='has a DOCTYPE'):
         read_urdf('<!DOCTYPE robot SYSTEM "file:///etc/passwd"><robot name="r"/>')
+
+
+# Fuzzing: any text is a chain or an InputError naming a field --------------------------
+
+PROPERTY = settings(max_examples=300, deadline=None, derandomize=True, database=None,
+                    suppress_health_check=[HealthCheck.too_slow])
+
+
+@pytest.fixture(scope='module')
+def meshes(tmp_path_factory):
+    """A folder with the meshes the drawn URDFs name (descriptions.MESHES)."""
+    folder = tmp_path_factory.mktemp('meshes')
+    write_binary_stl(folder / 'tet.stl', *TETRAHEDRON)
+    (folder / 'garbage.stl').write_bytes(b'solid \x00\xff not a mesh\n' * 7)
+    return folder
+
+
+def test_any_urdf_text_is_a_chain_or_an_input_error_naming_its_field(meshes):
+    """Random trees with cycles, second parents and roots, repeated and missing names, odd
+    numbers, tags and nesting, hostile XML. Pinocchio builds only what read_urdf accepts."""
+    seen = Counter()
+
+    @PROPERTY
+    @given(urdf_documents(), st.data())
+    def check(text, data):
+        try:
+            description = read_urdf(text)
+        except InputError as error:
+            assert error.field == 'robot.file' and '\n' not in str(error)
+            seen['refused'] += 1
+            return
+        tip = data.draw(st.sampled_from(description.links))
+        try:
+            chain = chain_from_urdf(description, tip, mesh_dirs=[str(meshes)])
+        except InputError as error:
+            assert error.field in ('robot.file', 'robot.tip_link'), str(error)
+            seen['no chain'] += 1
+            return
+        assert chain.n_joints >= 1 and chain.tool_frame == tip
+        assert np.all(np.isfinite(chain.placements)) and np.all(np.isfinite(chain.axes))
+        seen['chain'] += 1
+
+    check()
+    assert min(seen['refused'], seen['no chain'], seen['chain']) >= 30, seen
