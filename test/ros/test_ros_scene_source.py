@@ -91,9 +91,11 @@ def test_a_urdf_beyond_what_a_robot_is_keeps_the_last_good_robot(ros, planner, t
 
 
 def test_the_planner_serves_joint_states_while_a_big_urdf_is_built(ros, planner):
-    """A 1.4 MB Panda with 960 more links takes seconds to build: joint states (alternately
-    good and bad, each answered on /diagnostics) are read meanwhile. Built in the
-    subscription's callback, they waited in the node's queue until the robot was there."""
+    """A 1.1 MB Panda with 960 more links takes seconds to build and warm up: joint states
+    (alternately good and bad, each answered on /diagnostics) are read meanwhile, most of
+    them before the robot is there. Built in the subscription's callback, none was (they
+    waited in the node's queue); with the kernels warmed in the node's callback, about
+    one in ten."""
     ros.probe.advertise(JointState, '/joint_states')
     good = create_joint_state(JOINTS, Q_S)
     bad = JointState(name=JOINTS, position=[math.nan] * len(JOINTS))
@@ -112,7 +114,7 @@ def test_the_planner_serves_joint_states_while_a_big_urdf_is_built(ros, planner)
         if STATUS in names:
             break
         answered += names.count(JOINT_STATUS)
-    assert answered >= 5, f'{answered} of {sent} joint states answered before the robot'
+    assert 2 * answered >= sent, f'{answered} of {sent} joint states answered before the robot'
     assert len(planner.scene.robot.collision_shapes) > 900  # the big one
 
 

@@ -9,8 +9,10 @@ from one place: the `disabled_collisions` parameter (link names in pairs, flatte
 on /robot_description_semantic (std_msgs/String, transient local; core/srdf.py), else
 the core's default (adjacent links and links touching at the zero configuration).
 
-The robot is built again whenever either description changes, in a thread of its own:
-the node goes on serving its other callbacks meanwhile, with the last good robot. A
+The robot is built again whenever either description changes, in a thread of its own,
+and its compiled kernels are run there once (core/warmup.py: seconds for a robot of a
+thousand shapes, and the node's own `load_kernels` then returns at once): the node goes
+on serving its other callbacks meanwhile, with the last good robot. A
 description that arrives during a build supersedes the one being built (that result is
 dropped); a finished robot is handed to the node in its default callback group, where
 the subscription callback used to build it. Until a robot is there, `scene` is None
@@ -33,7 +35,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import String
 
-from ftplan_ros.core import InputError, Scene, load_scene, robot_from_urdf
+from ftplan_ros.core import InputError, Scene, load_kernels, load_scene, robot_from_urdf
 from ftplan_ros.core.scene import MissingRobotError
 
 from .params import array_parameter, declare, declare_array, default_scene_file
@@ -192,7 +194,9 @@ class SceneSource:
         try:
             arm = robot_from_urdf(urdf, self._tip_link, self._base_link, self._tip_offset,
                                   self._disabled_pairs or None, srdf=srdf)
-            return load_scene(self.path, robot=arm), exceptions
+            scene = load_scene(self.path, robot=arm)
+            load_kernels(scene.robot)  # here, not in the node's callback: seconds for big ones
+            return scene, exceptions
         except InputError as error:
             return error
         except Exception as error:  # noqa: BLE001 - any bad description must leave the node up
