@@ -4,9 +4,13 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ros_support import SCENES
 from scipy.spatial.transform import Rotation
 from spatial_scenes import panda_scene
+from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import create_obstacle_markers
@@ -14,6 +18,7 @@ from ftplan_ros.core import CollisionChecker, InputError, Obstacle, Task, load_s
 from ftplan_ros.core.angles import wrap_angle
 from ftplan_ros.core.approach import straight_move_ends
 from ftplan_ros.core.paths import point_at_fraction
+from ftplan_ros.core.validation import LARGEST_NUMBER
 from ftplan_ros.nodes.motion import fraction_at_time, progress_along, time_at_fraction, time_path
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
@@ -115,6 +120,39 @@ def test_an_obstacle_set_is_all_or_nothing():
         obstacles.update(bad)
     assert len(obstacles) == 1                                    # the DELETEALL did not apply
     assert obstacles.scene().obstacles[0].radius == pytest.approx(0.1)
+
+
+HUGE = st.one_of(st.floats(), st.sampled_from([1e300, -1e300, 1e6, 1.0000001e6, 5e-324]))
+
+
+@pytest.mark.filterwarnings('ignore:overflow encountered:RuntimeWarning')  # norms of 1e300
+@settings(max_examples=150, deadline=None, derandomize=True, database=None)
+@given(st.lists(st.tuples(st.sampled_from([Marker.SPHERE, Marker.CUBE, Marker.CYLINDER]),
+                          st.sampled_from([Marker.ADD, Marker.DELETE, Marker.DELETEALL]),
+                          st.integers(0, 3), st.tuples(HUGE, HUGE, HUGE),
+                          st.tuples(HUGE, HUGE, HUGE, HUGE), st.tuples(HUGE, HUGE, HUGE)),
+                max_size=5))
+def test_any_marker_array_gives_bounded_obstacles_or_a_value_error_leaving_the_set(markers):
+    """Huge, tiny and non-finite numbers all the way to the core's obstacles."""
+    obstacles = ObstacleSet(load_scene(SCENES / 'paper_a_free.yaml'))
+    sphere = shape_from_obstacle(('a', 0), Obstacle('sphere', (1.0, 1.0, 0.0), radius=0.1))
+    obstacles.update(create_obstacle_markers([sphere], 'base_link'))
+    before = obstacles.scene().obstacles
+    msg = MarkerArray(markers=[Marker(
+        header=Header(frame_id='base_link'), ns='n', id=key, type=kind, action=action,
+        pose=Pose(position=Point(x=p[0], y=p[1], z=p[2]),
+                  orientation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])),
+        scale=Vector3(x=v[0], y=v[1], z=v[2])) for kind, action, key, p, q, v in markers])
+    try:
+        obstacles.update(msg)
+    except ValueError as error:
+        assert 'obstacle' in str(error)
+        assert obstacles.scene().obstacles == before
+        return
+    for obstacle in obstacles.scene().obstacles:
+        for name in ('center', 'radius', 'size', 'length', 'rpy'):
+            values = np.atleast_1d(getattr(obstacle, name))
+            assert np.all(np.isfinite(values)) and np.all(np.abs(values) <= LARGEST_NUMBER)
 
 
 def test_sim_motion_samples_linearly_and_ends_exactly():

@@ -108,11 +108,16 @@ class Robot(Protocol):
 
 @dataclass(frozen=True, eq=False)
 class LinkShape:
-    """A collision shape of link `link`, posed by `placement` (4, 4) in the link's frame."""
+    """A collision shape of link `link`, posed by `placement` (4, 4) in the link's frame.
+
+    `urdf_link` names the URDF link the shape comes from (a link folded into `link` by a
+    fixed or locked joint, or `link` itself); '' for chains not read from a URDF.
+    """
 
     link: int
     shape: Shape
     placement: np.ndarray
+    urdf_link: str = ''
 
 
 @dataclass(frozen=True)

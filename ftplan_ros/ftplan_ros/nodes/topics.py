@@ -2,6 +2,7 @@
 
 JOINT_STATES = '/joint_states'
 ROBOT_DESCRIPTION = '/robot_description'
+ROBOT_DESCRIPTION_SEMANTIC = '/robot_description_semantic'  # MoveIt's SRDF (issue 33)
 OBSTACLES = '/ftplan/obstacles'
 PLAN_SERVICE = '/ftplan/plan'
 START_CONFIGURATION = '/ftplan/plan/start_configuration'
