@@ -127,11 +127,11 @@ def test_a_description_that_arrives_during_a_build_supersedes_it(ros, planner):
     before = len(statuses(ros, STATUS))
     spare = ('<link name="spare"/><joint name="s" type="fixed"><parent link="panda_link0"/>'
              '<child link="spare"/></joint>')
-    planner.source.robot_description_callback(String(data=heavy_panda(960)))  # seconds
+    planner.source.robot_description_callback(String(data=heavy_panda(100)))  # 1 s or so
     planner.source.robot_description_callback(String(data=panda_with(spare)))
     wait_for(lambda: statuses(ros, STATUS, after=before), 60.0, 'a robot')
     assert [s.level for s in statuses(ros, STATUS, after=before)] == ['OK']
-    assert len(planner.scene.robot.collision_shapes) == 37  # the Panda's, not the big one's
+    assert len(planner.scene.robot.collision_shapes) == 37  # the Panda's, not the bigger one's
 
 
 def test_the_srdf_gives_the_exceptions_and_a_bad_one_keeps_the_last_good_robot(ros, planner):
