@@ -14,7 +14,8 @@ setup(
         (f'share/{package_name}', ['package.xml']),
         # config/ lives at the repository root, beside both packages.
         (f'share/{package_name}/config/robots',
-         glob('../config/robots/*.yaml') + glob('../config/robots/*.urdf')),
+         glob('../config/robots/*.yaml') + glob('../config/robots/*.urdf')
+         + glob('../config/robots/*.srdf')),
         (f'share/{package_name}/config/scenes', glob('../config/scenes/*.yaml')),
         (f'share/{package_name}/config/params', glob('../config/params/*.yaml')),
         (f'share/{package_name}/config/studies', glob('../config/studies/*.yaml')),

@@ -9,10 +9,12 @@ scene's task and then, for each run, resets the sim, executes the plan and lets 
 injector lock a joint: first one run per `--drill JOINT@FRACTION` (or JOINT@SECONDSs),
 then `--trials N` runs with a random joint at a random moment (seed `--seed`); with
 neither, one run without a failure. It prints a summary (plan time, the joint and moment
-of each failure, recovery time, goal errors in position [m] and, for axis and pose
-tasks, orientation [rad], minimum clearance) and exits 0 only when
-every run reached the goal without a collision, 1 otherwise, 2 on bad input and 130 on
-Ctrl-C (after shutting every node down).
+of each failure, asked and landed, recovery time, goal errors in position [m] and, for
+axis and pose tasks, orientation [rad], minimum clearance; how many runs were drilled as
+asked) and exits 0 only when every run reached the goal without a collision and every
+drill was drilled as asked (its lock landed on the nominal path within 0.02 of its
+fraction: `Drill.missed`), 1 otherwise, 2 on bad input and 130 on Ctrl-C (after shutting
+every node down).
 """
 
 from __future__ import annotations
@@ -66,7 +68,7 @@ class RunReport:
     ok: bool                   # reached the goal without a collision
     message: str
     locked_joint: str = ''
-    lock_progress: float = float('nan')    # fraction of the nominal path when it locked
+    lock_progress: float = float('nan')    # fraction of the nominal path where it locked
     recovery_time: float = float('nan')    # lock event -> goal
     goal_error: float = float('nan')
     goal_orientation_error: float = float('nan')
@@ -74,6 +76,7 @@ class RunReport:
     collisions: int = 0
     lock_configuration: np.ndarray | None = None   # (n,) where the arm stopped, locked
     motion: np.ndarray | None = None               # (k, n) recorded joint states
+    missed: str = ''           # how the lock missed the drill ('' drilled as asked, or none)
 
 
 class Suite:
@@ -140,8 +143,13 @@ class Director:
                                        frame_id=self.scene.frame_id, timeout=timeout)
         return self.motion
 
-    def run(self, number: int, record: bool = False, timeout: float = 120.0) -> RunReport:
-        """Reset the executor and sim, execute the plan (the injector drills it), judge the run."""
+    def run(self, number: int, record: bool = False, timeout: float = 120.0,
+            drilled: bool = False) -> RunReport:
+        """Reset the executor and sim, execute the plan (the injector drills it), judge the run.
+
+        With `drilled`, the injector was to drill this run: a run it armed no drill for
+        counts as not drilled.
+        """
         client = self.client
         repaired, why = client.trigger(f'/{EXECUTOR_NODE}/reset')
         if not repaired:
@@ -180,14 +188,17 @@ class Director:
         else:
             why = report.message
         lock = values.get('lock_configuration')
+        locked_joint, landed = values.get('locked_joint', ''), report.number('lock_progress')
+        missed = parse_drill(drill, None).missed(locked_joint, values.get('lock_phase', ''),
+                                                 landed) if drill else \
+            'the injector armed no drill' if drilled else ''
         return RunReport(
-            number, drill, ok, why, values.get('locked_joint', ''),
-            report.number('lock_progress'), report.number('recovery_time_s'),
+            number, drill, ok, why, locked_joint, landed, report.number('recovery_time_s'),
             parse_number(sim.get('goal_error_m')),
             parse_number(sim.get('goal_orientation_error_rad')),
             parse_number(sim.get('min_clearance_m')),
             collisions, np.array(parse_vector(lock)) if lock else None,
-            np.array(self.recording) if record and self.recording else None)
+            np.array(self.recording) if record and self.recording else None, missed)
 
 
 def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) -> str:
@@ -211,18 +222,32 @@ def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) ->
         at = f'{100 * r.lock_progress:.1f}' if np.isfinite(r.lock_progress) else '-'
         recovery = f'{r.recovery_time:.2f}' if np.isfinite(r.recovery_time) else '-'
         angle = f'{r.goal_orientation_error:>10.2e}' if oriented else ''
+        result = 'reached' if r.ok else 'FAILED: ' + r.message
         lines.append(f'{r.run:>4}  {r.drill or "-":<{drill_width}}{r.locked_joint or "-":<{width}}'
                      f'{at:>7}{recovery:>14}{r.goal_error:>14.2e}{angle}'
-                     f'{r.min_clearance:>15.4f}  '
-                     f'{"reached" if r.ok else "FAILED: " + r.message}')
+                     f'{r.min_clearance:>15.4f}  {result}'
+                     + (f'; NOT DRILLED: {r.missed}' if r.missed else ''))
     recoveries = np.array([r.recovery_time for r in runs if np.isfinite(r.recovery_time)])
     if len(recoveries):
         lines.append(f'recovery time p50 {np.percentile(recoveries, 50):.2f} s, p95 '
                      f'{np.percentile(recoveries, 95):.2f} s over {len(recoveries)} '
                      'recoveries')
     lines.append(f'{sum(r.ok for r in runs)}/{len(runs)} runs reached the goal without '
-                 'collision')
+                 f'collision{count_drills(runs)}')
     return '\n'.join(lines)
+
+
+def count_drills(runs: Sequence[RunReport]) -> str:
+    """Say how many drilled runs were drilled as asked, and how the others missed ('' if none)."""
+    drilled = [r for r in runs if r.drill or r.missed]
+    if not drilled:
+        return ''
+    missed = [r for r in drilled if r.missed]
+    text = f'; {len(drilled) - len(missed)}/{len(drilled)} drilled as asked'
+    if missed:
+        text += f', {len(missed)} not drilled (' + '; '.join(
+            f'run {r.run} {r.drill or "-"}: {r.missed}' for r in missed) + ')'
+    return text
 
 
 def pick_run_to_draw(runs: Sequence[RunReport]) -> RunReport | None:
@@ -308,10 +333,12 @@ def _plan_and_run(director: Director, args: argparse.Namespace, scene: Scene,
                   f'{motion.approach or "not reported"}; {runs_wanted} run(s)')
     runs: list[RunReport] = []
     for number in range(1, runs_wanted + 1):
-        report = director.run(number, record=args.png is not None, timeout=args.timeout)
+        report = director.run(number, record=args.png is not None, timeout=args.timeout,
+                              drilled=bool(args.drill or args.trials))
         runs.append(report)
         progress.line(f'run {number}/{runs_wanted}: {report.drill or "no drill"} -> '
-                      f'{"reached" if report.ok else "FAILED: " + report.message}')
+                      f'{"reached" if report.ok else "FAILED: " + report.message}'
+                      + (f'; NOT DRILLED: {report.missed}' if report.missed else ''))
     print(summarize(scene, motion, runs))
     png_run = pick_run_to_draw(runs)
     if args.png is not None and png_run is not None:
@@ -320,7 +347,7 @@ def _plan_and_run(director: Director, args: argparse.Namespace, scene: Scene,
         except ImportError as error:
             print(f'ftplan-bringup: cannot draw {args.png}: {error}', file=sys.stderr)
             return 1
-    return 0 if all(r.ok for r in runs) else 1
+    return 0 if all(r.ok and not r.missed for r in runs) else 1
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -19,12 +19,19 @@ no plan its message carries the planner's reason from /diagnostics. `execute` ca
 /ftplan/execute and follows the executor's status until the arm is at the goal or the
 execution failed. Never use a PlanClient from inside another node's callback: its verbs
 block while they spin.
+
+While a verb waits for a node, it watches the ROS graph: once the service it called has
+no server (the node stopped, or its process died), it ends with Outcome.FAILED saying
+which service left, instead of waiting for its timeout. A node that stops cleanly leaves
+the graph at once; one that dies (SIGKILL, a crash) leaves it when DDS declares it lost:
+Fast DDS's default participant lease is 20 s.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -35,6 +42,7 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.srv import GetPlan
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
@@ -68,6 +76,10 @@ from .nodes.topics import (
 _POLL = 0.02  # [s] longest single wait of the client's executor
 _STATUS_LOG_SIZE = 500  # recent /diagnostics statuses kept
 _STATUS_WAIT = 1.0  # [s] longest wait for the planner's status of a plan once it answered
+# The planner's latched results of this many recent plans are kept: plans answered side by
+# side (plan workers) publish theirs back to back, and the client's own may not be the last.
+_PLAN_HISTORY = 20
+_GONE_AFTER = 0.5  # [s] a service without a server this long has left, not flickered
 
 
 class Outcome(Enum):
@@ -147,16 +159,18 @@ class PlanClient(Node):
         self._statuses: dict[str, DiagnosticReading] = {}
         self._status_log: list[tuple[int, DiagnosticReading]] = []
         self._status_seq = 0
-        self._start: JointState | None = None
-        self._trajectory: JointTrajectory | None = None
-        self._surface: Float64MultiArray | None = None
+        # The latched results of recent plans, newest last.
+        self._starts: deque[JointState] = deque(maxlen=_PLAN_HISTORY)
+        self._trajectories: deque[JointTrajectory] = deque(maxlen=_PLAN_HISTORY)
+        self._surfaces: deque[Float64MultiArray] = deque(maxlen=_PLAN_HISTORY)
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, self._diagnostics_callback, 50)
-        self.create_subscription(JointState, START_CONFIGURATION,
-                                 lambda msg: setattr(self, '_start', msg), LATCHED_QOS)
-        self.create_subscription(JointTrajectory, TRAJECTORY,
-                                 lambda msg: setattr(self, '_trajectory', msg), LATCHED_QOS)
-        self.create_subscription(Float64MultiArray, FAILURE_SURFACE,
-                                 lambda msg: setattr(self, '_surface', msg), LATCHED_QOS)
+        results_qos = QoSProfile(depth=_PLAN_HISTORY, durability=LATCHED_QOS.durability,
+                                 reliability=LATCHED_QOS.reliability)
+        for msg_type, topic, kept in ((JointState, START_CONFIGURATION, self._starts),
+                                      (JointTrajectory, TRAJECTORY, self._trajectories),
+                                      (Float64MultiArray, FAILURE_SURFACE, self._surfaces)):
+            self.create_subscription(msg_type, topic, lambda msg, kept=kept: kept.append(msg),
+                                     results_qos)
         self._executor = SingleThreadedExecutor(context=self.context)
         self._executor.add_node(self)
 
@@ -181,15 +195,19 @@ class PlanClient(Node):
         return True
 
     def _call(self, client, request, timeout: float):
-        """Call a service; return (response or None, round trip [s])."""
+        """Call a service; return (response or None, round trip [s], whether its server left).
+
+        Gives up early when the service has no server any more (`_ServerWatch`).
+        """
         sent = time.perf_counter()
         future = client.call_async(request)
-        self.spin_until(future.done, timeout)
+        left = _ServerWatch(client)
+        self.spin_until(lambda: future.done() or left(), timeout)
         elapsed = time.perf_counter() - sent
         if not future.done():
             client.remove_pending_request(future)
-            return None, elapsed
-        return future.result(), elapsed
+            return None, elapsed, left.gone
+        return future.result(), elapsed, False
 
     def _diagnostics_callback(self, msg: DiagnosticArray) -> None:
         for status in msg.status:
@@ -217,8 +235,12 @@ class PlanClient(Node):
                 if reading.name == name and seq > since]
 
     def wait_for_status(self, name: str, accept: Callable[[dict], bool], timeout: float,
-                        since: int = 0) -> DiagnosticReading | None:
-        """Spin until a status `name` after `since` has values that `accept`; None on timeout."""
+                        since: int = 0, give_up: Callable[[], bool] = lambda: False,
+                        ) -> DiagnosticReading | None:
+        """Spin until a status `name` after `since` has values that `accept`.
+
+        Returns None after `timeout` [s], or as soon as `give_up()` is true.
+        """
         found: list[DiagnosticReading] = []
 
         def seen() -> bool:
@@ -226,9 +248,10 @@ class PlanClient(Node):
                 if seq > since and reading.name == name and accept(reading.values):
                     found.append(reading)
                     return True
-            return False
+            return give_up()
 
-        return found[0] if self.spin_until(seen, timeout) else None
+        self.spin_until(seen, timeout)
+        return found[0] if found else None
 
     # Verbs --------------------------------------------------------------------------
 
@@ -263,7 +286,10 @@ class PlanClient(Node):
                                   tolerance=float(tolerance))
         deadline = time.monotonic() + timeout
         mark = self.status_mark
-        response, round_trip = self._call(self.plan_client, request, timeout)
+        response, round_trip, left = self._call(self.plan_client, request, timeout)
+        if left:
+            return PlannedMotion(Outcome.FAILED, _left(PLAN_SERVICE, 'planner'),
+                                 round_trip_s=round_trip)
         if response is None:
             return PlannedMotion(Outcome.TIMED_OUT, f'no answer from {PLAN_SERVICE} within '
                                  f'{timeout} s', round_trip_s=round_trip)
@@ -316,26 +342,30 @@ class PlanClient(Node):
         problems = []
 
         def complete() -> bool:
-            start, trajectory, surface = self._start, self._trajectory, self._surface
-            if start is None or trajectory is None or surface is None or \
-                    stamp_key(start.header.stamp) != key or \
-                    stamp_key(trajectory.header.stamp) != key:
+            start = _stamped(self._starts, key)
+            trajectory = _stamped(self._trajectories, key)
+            if start is None or trajectory is None:
                 return False
             names = tuple(trajectory.joint_names)
             try:
                 positions, times = read_joint_trajectory(trajectory, names)
-                paths = read_failure_surface(surface)
                 theta_s = read_joint_state(start, names)
             except ValueError as error:
                 problems[:] = [f'unreadable plan topics: {error}']
                 return False
-            if paths.shape[1:] != positions.shape:
-                return False
-            matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
-            if len(matches) == 0:
-                return False
-            found.append((names, theta_s, positions, times, paths, int(matches[0])))
-            return True
+            for surface in reversed(self._surfaces):  # the newest S_F holding the path
+                try:
+                    paths = read_failure_surface(surface)
+                except ValueError as error:
+                    problems[:] = [f'unreadable plan topics: {error}']
+                    continue
+                if paths.shape[1:] != positions.shape:
+                    continue
+                matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
+                if len(matches):
+                    found.append((names, theta_s, positions, times, paths, int(matches[0])))
+                    return True
+            return False
 
         if self.spin_until(complete, timeout):
             return found[0]
@@ -345,8 +375,8 @@ class PlanClient(Node):
                 ) -> ExecutionReport:
         """Execute the executor's plan (`motion`'s, once the executor holds it) to the end.
 
-        Returns when the executor reports done (SUCCEEDED) or failed (FAILED), or after
-        `timeout` [s] (TIMED_OUT).
+        Returns when the executor reports done (SUCCEEDED) or failed (FAILED), leaves the
+        ROS graph (FAILED), or after `timeout` [s] (TIMED_OUT).
         """
         if not self.spin_until(self.execute_client.service_is_ready, min(timeout, 5.0)):
             return ExecutionReport(Outcome.UNAVAILABLE, f'{EXECUTE_SERVICE} is not available')
@@ -359,17 +389,24 @@ class PlanClient(Node):
                 return ExecutionReport(Outcome.TIMED_OUT,
                                        f'the executor did not receive plan {motion.stamp}')
         mark = self.status_mark
-        response, _ = self._call(self.execute_client, Trigger.Request(),
-                                 max(0.0, deadline - time.monotonic()))
+        response, _, left = self._call(self.execute_client, Trigger.Request(),
+                                       max(0.0, deadline - time.monotonic()))
+        if left:
+            return ExecutionReport(Outcome.FAILED, _left(EXECUTE_SERVICE, 'executor'))
         if response is None:
             return ExecutionReport(Outcome.TIMED_OUT, f'no answer from {EXECUTE_SERVICE}')
         if not response.success:
             return ExecutionReport(Outcome.FAILED, response.message)
         number = _execution_number(response.message)
+        gone = _ServerWatch(self.execute_client)
         final = self.wait_for_status(
             self._executor_status,
             lambda v: v.get('execution') == str(number) and v.get('state') in ('done', 'failed'),
-            max(0.0, deadline - time.monotonic()), mark)
+            max(0.0, deadline - time.monotonic()), mark, gone)
+        if final is None and gone.gone:
+            return ExecutionReport(Outcome.FAILED, f'execution {number}: the executor left '
+                                   f'the ROS graph ({EXECUTE_SERVICE} has no server) before it '
+                                   'finished', number)
         if final is None:
             return ExecutionReport(Outcome.TIMED_OUT, f'execution {number} did not finish '
                                    f'within {timeout} s', number)
@@ -383,10 +420,47 @@ class PlanClient(Node):
             client = self._trigger_clients[service] = self.create_client(Trigger, service)
         if not self.spin_until(client.service_is_ready, timeout):
             return False, f'{service} is not available'
-        response, _ = self._call(client, Trigger.Request(), timeout)
+        response, _, left = self._call(client, Trigger.Request(), timeout)
+        if left:
+            return False, _left(service, 'node serving it')
         if response is None:
             return False, f'no answer from {service} within {timeout} s'
         return response.success, response.message
+
+
+class _ServerWatch:
+    """Whether a client's service lost its server: called while waiting on the client.
+
+    True (and `gone` too) once the service has had no server for `_GONE_AFTER` [s] on end:
+    the server left the ROS graph.
+    """
+
+    def __init__(self, client):
+        self._client = client
+        self._missing_since: float | None = None
+        self.gone = False
+
+    def __call__(self) -> bool:
+        if self._client.service_is_ready():
+            self._missing_since = None
+            return False
+        now = time.monotonic()
+        if self._missing_since is None:
+            self._missing_since = now
+        self.gone = now - self._missing_since >= _GONE_AFTER
+        return self.gone
+
+
+def _left(service: str, server: str) -> str:
+    """Say that `service` lost its server (the `server`, e.g. 'planner') before answering."""
+    return (f'{service} left the ROS graph before answering: the {server} is gone (stopped, '
+            'or its process died)')
+
+
+def _stamped(messages: deque, key: str):
+    """Return the newest message of `messages` stamped `key` ('sec.nanosec'), else None."""
+    return next((msg for msg in reversed(messages) if stamp_key(msg.header.stamp) == key),
+                None)
 
 
 def _plan_time(status: DiagnosticReading | None) -> float:

@@ -242,6 +242,42 @@ def test_any_marker_array_is_read_or_refused_with_a_value_error_leaving_the_set(
         assert np.linalg.norm(shape.orientation) == pytest.approx(1.0)
 
 
+def marker_actions():
+    """ADD, DELETE and DELETEALL markers of a few keys (so that keys repeat), valid shapes."""
+    return st.lists(st.tuples(
+        st.sampled_from([Marker.ADD, Marker.ADD, Marker.DELETE, Marker.DELETEALL]),
+        st.sampled_from(['a', 'b']), st.integers(0, 2), obstacle_shapes().filter(bool)),
+        max_size=8)
+
+
+@PROPERTY
+@given(marker_actions(), obstacle_shapes())
+def test_marker_actions_apply_in_order_as_rviz_applies_them(actions, current):
+    """The set after the array is the set after each marker in turn, on a copy."""
+    known = {shape.key: shape for shape in current}
+    expected = dict(known)
+    markers = []
+    for action, ns, key, (shape, *_) in actions:
+        placed = shape._replace(key=(ns, key))
+        if action == Marker.ADD:
+            expected[placed.key] = placed
+        elif action == Marker.DELETE:
+            expected.pop(placed.key, None)
+        else:
+            expected.clear()
+        marker = create_obstacle_markers([placed], 'base_link', clear_first=False).markers[0]
+        marker.action = action
+        markers.append(marker)
+    before = dict(known)
+    result = read_obstacle_markers(MarkerArray(markers=markers), 'base_link', known)
+    assert known == before
+    assert sorted(result) == sorted(expected)
+    for key, shape in expected.items():
+        assert result[key].shape == shape.shape
+        assert np.array_equal(result[key].center, shape.center)
+        assert np.allclose(result[key].orientation, shape.orientation, atol=1e-12)
+
+
 @PROPERTY
 @given(st.lists(st.one_of(JUNK, obstacle_shapes().map(lambda s: s[0] if s else None)),
                 max_size=3), JUNK, JUNK)

@@ -199,9 +199,12 @@ def marker_array(g: np.random.Generator) -> MarkerArray:
 
 def locked_joint(g: np.random.Generator) -> JointState:
     """A lock event that must be refused: it would otherwise lock a joint of the arm."""
-    defect = int(g.integers(5))
+    defect = int(g.integers(6))
     if defect == 0:
         return JointState(name=[_text(g) + '?'])
+    if defect == 5:  # its moment before the epoch: refused, not taken as at once
+        return JointState(header=Header(stamp=Time(sec=int(g.integers(-2**31, 0)))),
+                          name=[str(g.choice(NAMES))])
     if defect == 1:
         return JointState(name=[])
     if defect == 2:

@@ -1,19 +1,22 @@
 """Many plan clients at once while the obstacles change (issue 10), against a running planner.
 
-`clients` threads each send `requests` GetPlan requests one after the other (fig3a's arm
-from (2, 0) to a goal drawn from GOALS) to a planner that some caller started on
-fig3a, while a publisher replaces the obstacles on /ftplan/obstacles at `obstacle_rate`
-[Hz] with 0-3 random disks. Every response is timed (request sent -> response). A plan's
-status names its obstacle set (`obstacle_set`, a digest of every number); its S_F (the
-failure-surface message holding a path equal to its trajectory) must be collision-free
-for that set: every path of the web is certified over its segments. An empty Path must
-come with a reason (the planner's status). Nothing here needs pytest.
+`clients` threads each send `requests` GetPlan requests one after the other (a task drawn
+from `tasks`; by default fig3a's arm from (2, 0) to a goal drawn from GOALS) to a
+planner that some caller started on the scene, while a publisher replaces the obstacles
+on /ftplan/obstacles at `obstacle_rate` [Hz] with 0-3 random disks (planar scenes; 0:
+the scene's obstacles stay). Every response is timed (request sent -> response). A plan's
+status names its robot (`robot`, a digest of the model) and its obstacle set
+(`obstacle_set`, a digest of every number): the robot must be the scene's, and its S_F
+(the failure-surface message holding a path equal to its trajectory) must be
+collision-free for that set: every path of the web is certified over its segments. An
+empty Path must come with a reason (the planner's status). Nothing here needs pytest.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,12 +38,14 @@ from ftplan_msgs_py import (
 )
 from ftplan_ros.core import CollisionChecker, Scene
 from ftplan_ros.core.collision.certification import certify_simplices
+from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.nodes.obstacles import obstacle_from_shape, obstacle_set_key
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.reporting import stamp_key
 from ftplan_ros.plan_client import _pose
 
 GOALS = [(1.0, 0.0), (1.2, 0.3), (0.9, -0.4), (1.4, 0.1)]
+FIG3A_TASKS = tuple(((2.0, 0.0), goal) for goal in GOALS)
 PLAN_STATUS = 'ftplan_planner: plan'
 
 
@@ -63,6 +68,11 @@ class LoadReport:
         """Requests answered (a plan or a refusal)."""
         return len(self.latencies)
 
+    @property
+    def throughput(self) -> float:
+        """Requests answered per second of the run [1/s]."""
+        return self.answered / self.seconds if self.seconds > 0.0 else float('nan')
+
     def percentile(self, q: float) -> float:
         """Latency percentile [s]."""
         return float(np.percentile(self.latencies, q)) if self.latencies else float('nan')
@@ -70,8 +80,9 @@ class LoadReport:
     def summary(self) -> str:
         """One table row and the details."""
         refused = sum(self.refused.values())
-        return (f'{self.answered + self.unanswered} requests in {self.seconds:.1f} s: '
-                f'{self.answered} answered ({self.plans} plans, {refused} refused: '
+        return (f'{self.answered + self.unanswered} requests in {self.seconds:.1f} s '
+                f'({self.throughput:.2f} answered/s): {self.answered} answered ({self.plans} '
+                f'plans, {refused} refused: '
                 f'{dict(sorted(self.refused.items()))}), {self.unanswered} unanswered; latency '
                 f'p50 {self.percentile(50):.2f} s, p95 {self.percentile(95):.2f} s, max '
                 f'{max(self.latencies, default=float("nan")):.2f} s; plans sound for their '
@@ -81,7 +92,8 @@ class LoadReport:
 
 def _kind(reason: str) -> str:
     for kind in ('plan_timeout', 'no failure-tolerant plan', 'bad plan request',
-                 'internal planner error'):
+                 'internal planner error', 'obstacle updates were lost',
+                 'replaced the robot'):
         if kind in reason:
             return kind
     return reason[:40]
@@ -91,10 +103,12 @@ class LoadRun:
     """Clients, obstacle publisher and checks of one load run, in one rclpy context."""
 
     def __init__(self, context, scene: Scene, clients: int = 20, requests: int = 10,
-                 obstacle_rate: float = 10.0, seed: int = 0, timeout: float = 300.0):
+                 obstacle_rate: float = 10.0, seed: int = 0, timeout: float = 300.0,
+                 tasks: Sequence[tuple[Sequence[float], Sequence[float]]] = FIG3A_TASKS):
         self.scene = scene
         self.clients, self.requests = clients, requests
-        self.period = 1.0 / obstacle_rate
+        self.tasks = tasks
+        self.period = 1.0 / obstacle_rate if obstacle_rate > 0.0 else None
         self.g = np.random.default_rng(seed)
         self.timeout = timeout
         self.node = Node('ftplan_load', context=context)
@@ -158,7 +172,8 @@ class LoadRun:
         publisher = threading.Thread(target=self._publish_obstacles, args=(stop, report),
                                      daemon=True)
         spinner.start()
-        publisher.start()
+        if self.period is not None:
+            publisher.start()
         started = time.monotonic()
         workers = [threading.Thread(target=self._client, args=(k,), daemon=True)
                    for k in range(self.clients)]
@@ -169,7 +184,8 @@ class LoadRun:
         report.seconds = time.monotonic() - started
         time.sleep(1.0)   # the last results and statuses
         stop.set()
-        publisher.join()
+        if self.period is not None:
+            publisher.join()
         spinner.join()
         self._judge(report)
         self.executor.remove_node(self.node)
@@ -206,8 +222,8 @@ class LoadRun:
         client.wait_for_service(timeout_sec=30.0)
         g = np.random.default_rng(k)
         for _ in range(self.requests):
-            goal = GOALS[int(g.integers(len(GOALS)))]
-            request = GetPlan.Request(start=_pose((2.0, 0.0), self.scene.frame_id),
+            start, goal = self.tasks[int(g.integers(len(self.tasks)))]
+            request = GetPlan.Request(start=_pose(start, self.scene.frame_id),
                                       goal=_pose(goal, self.scene.frame_id))
             done = threading.Event()
             sent = time.monotonic()
@@ -220,6 +236,7 @@ class LoadRun:
 
     def _judge(self, report: LoadReport) -> None:
         robot = self.scene.robot
+        digest = robot_digest(robot)
         for latency, response in self.results:
             if response is None:
                 report.unanswered += 1
@@ -232,6 +249,10 @@ class LoadRun:
                 report.refused[kind] = report.refused.get(kind, 0) + 1
                 continue
             report.plans += 1
+            if status is not None and status.values.get('robot') != digest:
+                report.unsound.append(f'plan {key}: made for robot '
+                                      f'{status.values.get("robot")}, not the scene\'s {digest}')
+                continue
             obstacles = self.sets.get(status.values.get('obstacle_set', '')) if status else None
             index, nominal = self.trajectories.get(key, (len(self.surfaces), None))
             web = self.surfaces[index] if index < len(self.surfaces) else None

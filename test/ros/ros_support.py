@@ -224,6 +224,50 @@ class Process:
         self.popen.wait()
 
 
+def children(pid: int) -> list[int]:
+    """Return the process ids whose parent is `pid` (from /proc)."""
+    found = []
+    for stat in Path('/proc').glob('[0-9]*/stat'):
+        try:
+            fields = stat.read_text().rsplit(')', 1)[1].split()
+        except OSError:  # it ended meanwhile
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def descendants(pid: int) -> list[int]:
+    """Return the process ids of the children of `pid`, their children, and so on."""
+    found = children(pid)
+    for child in list(found):
+        found += descendants(child)
+    return found
+
+
+def running(pid: int) -> bool:
+    """Whether process `pid` exists and has not ended (a zombie has)."""
+    try:
+        state = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state not in ('Z', 'X')
+
+
+def plan_workers(planner_pid: int) -> list[int]:
+    """Return the plan workers of a planner process: the children of its fork server."""
+    servers = [pid for pid in children(planner_pid)
+               if b'forkserver' in _command_line(pid)]
+    return [pid for server in servers for pid in children(server)]
+
+
+def _command_line(pid: int) -> bytes:
+    try:
+        return Path(f'/proc/{pid}/cmdline').read_bytes()
+    except OSError:
+        return b''
+
+
 def installed(executable: str) -> str:
     """Return the path of an installed executable in lib/ftplan_ros."""
     require_install()

@@ -3,8 +3,13 @@
 import sys
 from pathlib import Path
 
+import numpy as np
 from ros_support import FIG3A, wait_for
 from spatial_scenes import panda_scene
+
+from ftplan_ros.bringup import RunReport, summarize
+from ftplan_ros.core import load_scene
+from ftplan_ros.plan_client import Outcome, PlannedMotion
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
@@ -22,6 +27,46 @@ def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tm
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'
     assert 'run 1/1: joint2@0.4 -> reached' in err
     assert 'approach: ' in err  # how the arm gets to θ_s, from the planner's status
+
+
+def test_a_drill_that_cannot_land_during_the_motion_is_not_drilled_and_exits_1(processes):
+    """Issue 33: a lock after the motion is no drilled run. Locked 60 s after the start,
+    long after the goal, joint2 is dropped by the injector; the summary said '1/1 runs
+    reached the goal' and the bringup exited 0, as if the recovery had been drilled."""
+    code, out, err = processes(BRINGUP + ['--scene', FIG3A, '--drill', 'joint2@60s']).wait(
+        timeout=300)
+    assert code == 1, out + err
+    assert out.splitlines()[-1] == (
+        '1/1 runs reached the goal without collision; 0/1 drilled as asked, 1 not drilled '
+        '(run 1 joint2@60s: no lock during the execution)')
+    assert 'reached; NOT DRILLED: no lock during the execution' in out
+    assert 'run 1/1: joint2@60s -> reached; NOT DRILLED' in err
+
+
+def test_the_summary_counts_drilled_runs_apart_from_runs_that_reached_the_goal():
+    """Issue 33: a lock after the motion read as a drilled run ('10/10 reached')."""
+    scene = load_scene(FIG3A)
+    motion = PlannedMotion(Outcome.SUCCEEDED, 'plan found', '1.0', ('joint1', 'joint2', 'joint3'),
+                           theta_s=np.zeros(3), trajectory=np.zeros((5, 3)),
+                           surface=np.zeros((4, 5, 3)), plan_time_s=0.1, round_trip_s=0.2)
+    late = 'lock landed at 100.0%: after the motion, asked 90.0%'
+    runs = [RunReport(1, 'joint2@0.5', True, 'reached', 'joint2', 0.5, 0.4, 1e-6,
+                      min_clearance=0.05),
+            RunReport(2, 'joint3@0.9', True, 'reached', 'joint3', 1.0, 0.1, 1e-6,
+                      min_clearance=0.05, missed=late),
+            RunReport(3, 'joint1@60s', True, 'reached', goal_error=1e-6, min_clearance=0.05,
+                      missed='no lock during the execution'),
+            RunReport(4, '', False, 'the sim did not report the goal reached')]
+    summary = summarize(scene, motion, runs).splitlines()
+    assert summary[-1] == (
+        '3/4 runs reached the goal without collision; 1/3 drilled as asked, 2 not drilled '
+        f'(run 2 joint3@0.9: {late}; run 3 joint1@60s: no lock during the execution)')
+    row = next(line for line in summary if line.lstrip().startswith('2 '))
+    assert row.endswith(f'reached; NOT DRILLED: {late}') and ' 100.0 ' in row
+    assert summarize(scene, motion, runs[:1]).splitlines()[-1] == \
+        '1/1 runs reached the goal without collision; 1/1 drilled as asked'
+    assert summarize(scene, motion, runs[3:]).splitlines()[-1] == \
+        '0/1 runs reached the goal without collision'
 
 
 def test_bad_input_exits_2_with_one_line(processes):

@@ -1,4 +1,5 @@
-"""Failure drills through ROS: all four nodes in one executor, every joint at five moments.
+"""Failure drills through ROS: all four nodes in one executor, every joint at five moments,
+and fraction drills on fast paths landing where they were asked.
 
 One test runs all fifteen drills on one plan (a module fixture would run once per xdist
 worker); it checks every run and reports all the runs that failed at once.
@@ -6,11 +7,12 @@ worker); it checks every run and reports all the runs that failed at once.
 
 import itertools
 
-from ros_support import FIG3A
+import pytest
+from ros_support import FIG3A, SCENES
 
 from ftplan_ros.bringup import Director, Suite
 from ftplan_ros.core import load_scene
-from ftplan_ros.nodes.injector import parse_drill
+from ftplan_ros.nodes.injector import DRILL_TOLERANCE, parse_drill
 from ftplan_ros.plan_client import PlanClient
 
 JOINTS = ('joint1', 'joint2', 'joint3')
@@ -30,18 +32,12 @@ def problems_of(run, drill: str) -> list[str]:
         problems.append(f'{run.collisions} collisions, clearance {run.min_clearance}')
     if not run.goal_error <= 0.01:
         problems.append(f'goal error {run.goal_error}')
-    if wanted.fraction < 1.0:
-        # The injector locks once the arm has done its share of the path, never before,
-        # and the executor recovers with the core's recover().
-        if run.locked_joint != wanted.joint:
-            problems.append(f'locked joint {run.locked_joint!r}')
-        elif not run.lock_progress >= wanted.fraction - 1e-9:
-            problems.append(f'locked at {run.lock_progress:.3f} < {wanted.fraction}')
-        elif not run.recovery_time > 0.0:
-            problems.append('no recovery time')
-    elif run.locked_joint and run.lock_progress < 0.99:
-        # At the very end the lock comes just before arrival, or after it (ignored).
-        problems.append(f'locked at {run.lock_progress:.3f} for a drill at the end')
+    # The lock lands where it was asked (the end too: the arm locks as it arrives), and
+    # the executor recovers with the core's recover().
+    if run.missed:
+        problems.append(f'not drilled: {run.missed}')
+    elif not run.recovery_time > 0.0:
+        problems.append('no recovery time')
     return problems
 
 
@@ -52,12 +48,40 @@ def test_every_joint_locked_at_every_moment_still_reaches_the_goal(ros_context):
         director = Director(client, load_scene(FIG3A))
         motion = director.plan(timeout=120.0)
         assert motion.succeeded, motion.message
-        runs = {drill: director.run(k + 1, timeout=120.0) for k, drill in enumerate(DRILLS)}
+        runs = {drill: director.run(k + 1, timeout=120.0, drilled=True)
+                for k, drill in enumerate(DRILLS)}
     finally:
         client.destroy_node()
         suite.shutdown()
     failures = {drill: problems for drill, run in runs.items()
                 if (problems := problems_of(run, drill))}
     assert not failures, failures
-    recovered = [run for run in runs.values() if run.locked_joint]
-    assert len(recovered) >= 12           # every drill before the end, at least
+    assert all(run.locked_joint for run in runs.values())
+
+
+@pytest.mark.parametrize('scene, speed, drills', [
+    (FIG3A, 6.0, ['joint1@0.1', 'joint2@0.35', 'joint3@0.6', 'joint2@0.85']),
+    (SCENES / 'panda_shelf.yaml', 2.0,
+     ['panda_joint3@0.5', 'panda_joint3@0.2', 'panda_joint2@0.8', 'panda_joint6@0.05']),
+], ids=['fig3a', 'panda_shelf'])
+def test_fraction_drills_on_a_fast_path_land_where_they_were_asked(ros_context, scene, speed,
+                                                                    drills):
+    """Issue 33: the lock lands within DRILL_TOLERANCE of its fraction of the nominal path,
+    as the executor reports it. The injector used to lock when it saw the arm past the
+    fraction on /joint_states (a tick of the sim late, 2-5 % of these paths) and the sim
+    took the event one to fifteen ticks later still: panda_joint3@0.5 landed at 58.5 %,
+    and a lock asked at 95 % after the motion, at 100 %."""
+    suite = Suite(scene, speed=speed, rate=100.0, drills=drills, context=ros_context)
+    client = PlanClient(context=ros_context)
+    try:
+        director = Director(client, load_scene(scene))
+        motion = director.plan(timeout=120.0)
+        assert motion.succeeded, motion.message
+        runs = [director.run(k + 1, timeout=120.0, drilled=True) for k in range(len(drills))]
+    finally:
+        client.destroy_node()
+        suite.shutdown()
+    landed = {run.drill: run.lock_progress for run in runs}
+    assert all(abs(landed.get(drill, float('nan')) - parse_drill(drill, None).fraction) <=
+               DRILL_TOLERANCE for drill in drills), landed
+    assert [(run.ok, run.missed) for run in runs] == [(True, '')] * len(drills), runs

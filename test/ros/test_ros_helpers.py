@@ -4,16 +4,22 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ros_support import SCENES
 from scipy.spatial.transform import Rotation
 from spatial_scenes import panda_scene
+from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import create_obstacle_markers
 from ftplan_ros.core import CollisionChecker, InputError, Obstacle, Task, load_scene, task_errors
 from ftplan_ros.core.model.angles import wrap_angle
+from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.core.planning.approach import straight_move_ends
-from ftplan_ros.nodes.motion import progress_along, time_path
+from ftplan_ros.core.validation import LARGEST_NUMBER
+from ftplan_ros.nodes.motion import fraction_at_time, progress_along, time_at_fraction, time_path
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
     obstacle_from_shape,
@@ -50,6 +56,25 @@ def test_progress_along_a_path_also_across_whole_turns():
     turned = np.array([1.0 + 2 * np.pi, 0.5, 0.0])
     assert progress_along(path, turned, np.ones(3, bool)) == pytest.approx((0.75, 0.0))
     assert progress_along(path, turned)[1] > 6.0                 # not periodic: far away
+
+
+def test_fractions_and_times_along_a_timed_path_are_one_measure_and_inverse():
+    """The fraction of a timed path is of its length (as progress_along measures it), not of
+    its time or its points; a pause holds it; time_at_fraction gives the first time."""
+    path = np.array([[0.0, 0.0], [3.0, 4.0], [3.0, 4.0], [3.0, 10.0]])   # lengths 5, 0, 6
+    times = np.array([0.0, 1.0, 1.5, 4.5])
+    assert fraction_at_time(path, times, 0.5) == pytest.approx(2.5 / 11)
+    assert fraction_at_time(path, times, 1.2) == pytest.approx(5 / 11)       # the pause
+    assert fraction_at_time(path, times, 3.0) == pytest.approx(8 / 11)
+    assert (fraction_at_time(path, times, -1.0), fraction_at_time(path, times, 9.0)) == (0, 1)
+    assert time_at_fraction(path, times, 5 / 11) == pytest.approx(1.0)
+    assert time_at_fraction(path, times, 8 / 11) == pytest.approx(3.0)
+    assert (time_at_fraction(path, times, 0.0), time_at_fraction(path, times, 1.0)) == (0, 4.5)
+    for fraction in np.linspace(0.0, 1.0, 23):
+        moment = time_at_fraction(path, times, fraction)
+        assert fraction_at_time(path, times, moment) == pytest.approx(fraction)
+        assert progress_along(path, point_at_fraction(path, fraction))[0] == \
+            pytest.approx(fraction)
 
 
 def test_straight_moves_offer_both_ways_round_shortest_first():
@@ -97,6 +122,39 @@ def test_an_obstacle_set_is_all_or_nothing():
     assert obstacles.scene().obstacles[0].radius == pytest.approx(0.1)
 
 
+HUGE = st.one_of(st.floats(), st.sampled_from([1e300, -1e300, 1e6, 1.0000001e6, 5e-324]))
+
+
+@pytest.mark.filterwarnings('ignore:overflow encountered:RuntimeWarning')  # norms of 1e300
+@settings(max_examples=150, deadline=None, derandomize=True, database=None)
+@given(st.lists(st.tuples(st.sampled_from([Marker.SPHERE, Marker.CUBE, Marker.CYLINDER]),
+                          st.sampled_from([Marker.ADD, Marker.DELETE, Marker.DELETEALL]),
+                          st.integers(0, 3), st.tuples(HUGE, HUGE, HUGE),
+                          st.tuples(HUGE, HUGE, HUGE, HUGE), st.tuples(HUGE, HUGE, HUGE)),
+                max_size=5))
+def test_any_marker_array_gives_bounded_obstacles_or_a_value_error_leaving_the_set(markers):
+    """Huge, tiny and non-finite numbers all the way to the core's obstacles."""
+    obstacles = ObstacleSet(load_scene(SCENES / 'paper_a_free.yaml'))
+    sphere = shape_from_obstacle(('a', 0), Obstacle('sphere', (1.0, 1.0, 0.0), radius=0.1))
+    obstacles.update(create_obstacle_markers([sphere], 'base_link'))
+    before = obstacles.scene().obstacles
+    msg = MarkerArray(markers=[Marker(
+        header=Header(frame_id='base_link'), ns='n', id=key, type=kind, action=action,
+        pose=Pose(position=Point(x=p[0], y=p[1], z=p[2]),
+                  orientation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])),
+        scale=Vector3(x=v[0], y=v[1], z=v[2])) for kind, action, key, p, q, v in markers])
+    try:
+        obstacles.update(msg)
+    except ValueError as error:
+        assert 'obstacle' in str(error)
+        assert obstacles.scene().obstacles == before
+        return
+    for obstacle in obstacles.scene().obstacles:
+        for name in ('center', 'radius', 'size', 'length', 'rpy'):
+            values = np.atleast_1d(getattr(obstacle, name))
+            assert np.all(np.isfinite(values)) and np.all(np.abs(values) <= LARGEST_NUMBER)
+
+
 def test_sim_motion_samples_linearly_and_ends_exactly():
     motion = Motion(np.array([[0.0, 0.0], [1.0, 2.0]]), np.array([0.0, 2.0]), start=10.0)
     assert np.allclose(motion.sample(11.0)[0], [0.5, 1.0])
@@ -113,6 +171,17 @@ def test_the_sim_motion_sweeps_through_every_waypoint_it_passes():
     assert np.allclose(motion.swept(10.2, 10.4)[0], [[0.2, 0.0], [0.4, 0.0]])
     swept, finished = motion.swept(11.5, 13.0)
     assert np.allclose(swept, [[1.0, 0.5], [1.0, 1.0], [1.0, 1.0]]) and finished
+
+
+def test_the_sim_motion_puts_a_moment_of_its_command_on_its_own_clock():
+    """Commanded 1 s a step from stamp 100 s, started at sim time 10 s; the sim slowed the
+    second step to 3 s: a moment of the command maps to where the arm is then."""
+    motion = Motion(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), np.array([0.0, 1.0, 4.0]),
+                    start=10.0, commanded=np.array([0.0, 1.0, 2.0]), stamp_ns=100 * 10**9)
+    assert motion.time_of(100_500_000_000) == pytest.approx(10.5)
+    assert motion.time_of(101_500_000_000) == pytest.approx(12.5)
+    assert np.allclose(motion.sample(motion.time_of(101_500_000_000))[0], [1.0, 0.5])
+    assert motion.time_of(99 * 10**9) == 10.0 and motion.time_of(200 * 10**9) == 14.0
 
 
 def test_the_default_initial_configuration_is_at_the_task_start_and_clear():

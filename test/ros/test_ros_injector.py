@@ -11,7 +11,15 @@ from std_srvs.srv import Trigger
 
 from ftplan_msgs_py import create_diagnostic_array, create_diagnostic_status, read_locked_joint
 from ftplan_ros.nodes.executor import ExecutorNode
-from ftplan_ros.nodes.injector import Drill, InjectorNode, parse_drill, random_drill
+from ftplan_ros.nodes.injector import (
+    DRILL_TOLERANCE,
+    Drill,
+    InjectorNode,
+    lock_moment,
+    parse_drill,
+    random_drill,
+)
+from ftplan_ros.nodes.motion import time_path
 from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.sim import SimNode
 from ftplan_ros.plan_client import Outcome, PlanClient
@@ -47,6 +55,49 @@ def test_random_drills_repeat_with_their_seed_and_cover_every_joint():
     drills = [random_drill(rng, NAMES) for _ in range(200)]
     assert {d.joint for d in drills} == set(NAMES)
     assert all(0.0 <= d.fraction <= 1.0 for d in drills)
+
+
+def test_a_fraction_drill_is_scheduled_when_the_nominal_command_reaches_it():
+    """The moment comes from the command's stamp and times, the fraction from the path's
+    length: the second segment is twice as long, but its time comes from its largest step."""
+    nominal = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.2, 1.6]])  # lengths 1, 2
+    times = time_path(nominal, 2.0)                                       # 0, 0.5, 1.3 s
+    stamp = 7 * 10**9
+    moment = lock_moment(nominal, nominal[1:], times[1:], stamp, 0.5, np.zeros(3, bool))
+    assert moment == stamp + 700_000_000                    # a quarter into the second step
+    start = lock_moment(nominal, nominal[1:], times[1:], stamp, 0.0, np.zeros(3, bool))
+    end = lock_moment(nominal, nominal[1:], times[1:], stamp, 1.0, np.zeros(3, bool))
+    assert (start, end) == (stamp, stamp + 1_300_000_000)
+    # The arm's lift: whole turns apart on a periodic joint, it is the nominal path still.
+    turned = nominal[1:] + [2.0 * np.pi, 0.0, 0.0]
+    periodic = np.array([True, False, False])
+    assert lock_moment(nominal, turned, times[1:], stamp, 0.5, periodic) == moment
+    assert lock_moment(nominal, turned, times[1:], stamp, 0.5, ~periodic) is None
+    # Any other command (an approach, a recovery, the nominal from elsewhere) is not it.
+    for other in (nominal[1:] + 1e-6, nominal[2:], nominal[:2]):
+        assert lock_moment(nominal, other, times[1:len(other) + 1], stamp, 0.5,
+                           np.zeros(3, bool)) is None
+
+
+@pytest.mark.parametrize('drill, locked, phase, landed, missed', [
+    ('joint2@0.5', 'joint2', 'nominal', 0.5, ''),
+    ('joint2@0.5', 'joint2', 'nominal', 0.519, ''),
+    ('joint2@0.5', 'joint2', 'nominal', 0.479, 'lock landed at 47.9%, asked 50.0%'),
+    ('joint2@0.5', 'joint2', 'nominal', 0.585, 'lock landed at 58.5%, asked 50.0%'),
+    ('joint2@0.9', 'joint2', 'nominal', 1.0, 'lock landed at 100.0%: after the motion, '
+                                             'asked 90.0%'),
+    ('joint2@0.99', 'joint2', 'nominal', 1.0, ''),
+    ('joint2@0.5', '', '', float('nan'), 'no lock during the execution'),
+    ('joint2@0.5', 'joint3', 'nominal', 0.5, 'joint3 locked, not joint2'),
+    ('joint2@0.0', 'joint2', 'approaching', float('nan'),
+     'the lock landed while approaching, not on the nominal path'),
+    ('joint2@0.5', 'joint2', 'nominal', float('nan'),
+     'the executor did not report where the lock landed'),
+    ('joint1@2.5s', 'joint1', 'approaching', float('nan'), ''),
+    ('joint1@60s', '', '', float('nan'), 'no lock during the execution'),
+])
+def test_a_drill_says_how_a_runs_lock_missed_it(drill, locked, phase, landed, missed):
+    assert parse_drill(drill, NAMES).missed(locked, phase, landed) == missed
 
 
 def test_lock_now_publishes_one_event_and_clears_itself(ros):
@@ -93,7 +144,7 @@ def test_a_drill_in_seconds_at_the_start_locks_during_the_approach(ros):
         client.destroy_node()
     assert second.result is Outcome.SUCCEEDED, second.message
     assert second.values['locked_joint'] == 'joint2'
-    assert second.number('lock_progress') >= 0.5
+    assert abs(second.number('lock_progress') - 0.5) <= DRILL_TOLERANCE
     wait_for(lambda: ros.probe.logged('ftplan_injector', 'execution 2: drill joint2@0.5'))
     assert ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request()).success
 

@@ -63,6 +63,17 @@ def test_bad_seeds_are_refused_and_the_nodes_stay_up(ros):
     assert injector.get_parameter('seed').value == 7
 
 
+def test_the_nominal_lead_is_bounded(ros):
+    """The executor's pause before the nominal path (time for a drill's scheduled lock):
+    negative, endless or longer than a second is refused, naming the bound."""
+    executor = ros.make(ExecutorNode)
+    for value, problem in [(-0.1, '>= 0'), (float('inf'), '>= 0'), (1.5, 'at most 1.0 s')]:
+        result = executor.set_parameters([Parameter('nominal_lead', value=value)])[0]
+        assert not result.successful and problem in result.reason, (value, result.reason)
+    assert executor.get_parameter('nominal_lead').value == 0.05
+    assert executor.set_parameters([Parameter('nominal_lead', value=0.0)])[0].successful
+
+
 def test_lock_now_set_twice_at_once_locks_twice_and_then_stays_quiet(ros):
     injector = ros.make(InjectorNode)
     ros.probe.listen(JointState, '/ftplan/locked_joint')

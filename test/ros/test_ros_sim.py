@@ -2,8 +2,11 @@
 
 import numpy as np
 import pytest
+from builtin_interfaces.msg import Time
+from rclpy.duration import Duration
 from ros_support import FIG3A, SCENES, wait_for
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -83,6 +86,26 @@ def test_a_locked_joint_brakes_the_arm_and_stays_locked(sim):
     wait_for(lambda: ros.probe.logged('ftplan_sim', 'moves locked joint joint2'))
 
 
+def test_a_lock_stamped_ahead_locks_where_the_command_puts_the_arm_at_that_moment(sim):
+    """Issue 33: a drill's lock event, stamped with its moment on the command's timeline,
+    locks the joint exactly there, between two ticks too, however early it arrives (the
+    sim locked where the arm stood when the event came: here before the motion began)."""
+    ros = sim
+    start = ros.probe.get_clock().now() + Duration(seconds=0.3)
+    ros.probe.publish(JointTrajectory, '/ftplan/joint_command', create_joint_trajectory(
+        NAMES, [[1.0, 0.0, 0.0], [1.0, 1.0, 0.5]], [0.5, 1.0], start.to_msg()))
+    moment = start + Duration(seconds=0.6537)                # 0.1537 s into the second step
+    ros.probe.publish(JointState, '/ftplan/locked_joint',
+                      create_locked_joint('joint2', stamp=moment.to_msg()))
+    wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.values['locked'] == 'joint2'],
+             what='joint2 locked')
+    def braked():
+        recent = [read_joint_state(m, NAMES) for m in ros.probe.received('/joint_states')[-2:]]
+        return len(recent) == 2 and np.array_equal(*recent)
+    wait_for(braked, what='the arm to stop')
+    assert np.allclose(last(ros), [1.0, 0.3074, 0.1537], atol=1e-9, rtol=0)
+
+
 def test_reset_unlocks_and_returns_to_the_initial_configuration(sim):
     ros = sim
     command(ros, [[1.0, 1.0, 1.0]], [1.0])
@@ -113,6 +136,10 @@ def test_malformed_commands_and_events_are_logged_and_ignored(sim):
     wait_for(lambda: ros.probe.logged('ftplan_sim', "unknown joint 'elbow'"))
     ros.probe.publish(JointState, '/ftplan/locked_joint', JointState(name=['a', 'b']))
     wait_for(lambda: ros.probe.logged('ftplan_sim', 'ignored locked-joint event'))
+    # Its stamp is when the joint locks: one before the epoch is refused, not taken as now.
+    ros.probe.publish(JointState, '/ftplan/locked_joint', JointState(
+        header=Header(stamp=Time(sec=-5)), name=['joint2']))
+    wait_for(lambda: ros.probe.logged('ftplan_sim', 'Time.sec = -5 is before the epoch'))
     assert np.array_equal(last(ros), [0.0, 0.0, 0.0])
     assert all(s.values['locked'] == '' for s in ros.probe.statuses(STATUS))
     command(ros, [[0.2, 0.2, 0.2]], [0.5])                 # still works

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import pytest
+from descriptions import CYCLE_JOINT, panda_with
 from ftplan_testing import SCENES
 
 
@@ -113,3 +114,22 @@ def test_missing_file_and_bad_arguments_exit_2(tmp_path):
     run = ftplan('plan', SCENES / 'fig3a.yaml', '--margin', 'nan')
     assert run.returncode == 2 and '--margin' in run.stderr
     assert ftplan('launch').returncode == 2  # argparse: unknown command
+
+
+@pytest.mark.parametrize('extra, message', [
+    pytest.param(CYCLE_JOINT, "robot.file: link panda_link2 has two parents (joints "
+                 "'panda_joint2' and 'cyc')", id='cycle'),
+    pytest.param('<link name="pedestal"/>', "robot.file: has 2 root links, 'panda_link0' and "
+                 "'pedestal'", id='two-roots'),
+])
+def test_a_urdf_that_is_no_tree_is_one_line_and_exit_2(tmp_path, extra, message):
+    """Pinocchio crashed on the cycle (SIGSEGV, no output) before it was checked."""
+    (tmp_path / 'robot.urdf').write_text(panda_with(extra))
+    scene = tmp_path / 'scene.yaml'
+    scene.write_text('robot: {type: urdf, file: robot.urdf, base_link: panda_link0, '
+                     'tip_link: panda_hand_tcp}\n'
+                     'task: {start: [0.5, -0.3, 0.4], goal: [0.4, 0.3, 0.5]}\n')
+    run = ftplan('plan', scene)
+    assert run.returncode == 2, run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert run.stderr.startswith(f'ftplan: error: {message}'), run.stderr

@@ -19,7 +19,7 @@ from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.model import kinematics
 from ftplan_ros.core.model.geometry import KINDS
-from ftplan_ros.core.model.robot import PlanarChain, task_errors, task_residuals
+from ftplan_ros.core.model.robot import PlanarChain, robot_digest, task_errors, task_residuals
 from ftplan_ros.core.model.spatial import SpatialArm
 from ftplan_ros.core.model.task_space import POINT_SIZE, TASK_DIM
 from ftplan_ros.core.planning.curves import FrozenJoints
@@ -465,3 +465,20 @@ def test_a_planar_chain_refuses_a_link_radius_that_is_not_a_finite_length(radius
     """Built in Python, not parsed: a negative radius would read as extra clearance."""
     with pytest.raises(InputError, match='robot.link_radius'):
         PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=radius)
+
+
+def test_the_robot_digest_names_the_model_and_nothing_else():
+    """Issue 33: a plan for a robot whose model changed (same joint names) must be told."""
+    panda = robot_config('panda')
+    assert robot_digest(panda) == robot_digest(robot_config('panda'))     # stable
+    assert robot_digest(panda.with_task_kind('position')) == robot_digest(panda)
+    assert robot_digest(PAPER) == robot_digest(PlanarChain((1.0, 1.0, 1.0), PAPER.joint_names))
+    others = [PlanarChain((1.0, 1.0, 1.1), PAPER.joint_names),          # a link length
+              PlanarChain((1.0, 1.0, 1.0), PAPER.joint_names, link_radius=0.01),  # a shape
+              PlanarChain((1.0, 1.0, 1.0), PAPER.joint_names,
+                          joint_limits=(None, None, (-3.0, 3.0))),       # a limit
+              PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c')),             # the names
+              robot_config('iiwa14')]
+    digests = {robot_digest(robot) for robot in [PAPER, *others]}
+    assert len(digests) == len(others) + 1
+    assert all(len(d) == 12 and int(d, 16) >= 0 for d in digests)

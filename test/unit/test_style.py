@@ -26,6 +26,8 @@ def test_the_ros_free_packages_load_no_ros_module():
     for package in (ftplan_ros.core, ftplan_ros.study, ftplan_ros.bench, ftplan_ros.figures):
         modules += [package.__name__] + [m.name for m in pkgutil.walk_packages(
             package.__path__, package.__name__ + '.')]
+    # The plan workers' fork server imports these: no ROS threads in the processes it forks.
+    modules += [f'ftplan_ros.nodes.plan_{name}' for name in ('pool', 'worker', 'jobs')]
     code = ('import importlib, sys\n'
             f'for name in {modules!r}:\n'
             '    importlib.import_module(name)\n'

@@ -281,3 +281,22 @@ def test_a_chain_model_checks_its_arrays():
 def test_chain_from_urdf_names_its_caller(urdf_file):
     with pytest.raises(InputError, match=r'^arm\.tip_link'):
         chain_from_urdf(bot_urdf(), 'gripper', where='arm')
+
+
+ONE_JOINT = '''<robot name="one"><link name="base">
+  <collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+  <link name="arm"/><link name="tip"/>
+  <joint name="turn" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="tool" type="fixed"><parent link="arm"/><child link="tip"/>
+    <origin xyz="0.5 0 0"/></joint></robot>'''
+
+
+def test_a_chain_of_one_joint_with_geometry_on_one_link_is_read():
+    """Its Jacobian came back (6,) and the self-collision pairs of one link failed to stack:
+    both raised (IndexError, ValueError) instead of giving the arm."""
+    robot = robot_from_urdf(ONE_JOINT, 'tip', task_kind='position')
+    assert robot.joint_names == ('turn',)
+    assert np.allclose(robot.model.axes, [[0.0, 0.0, 1.0]])
+    assert robot.model.self_collision_pairs == ()
+    assert np.allclose(robot.forward_kinematics(np.array([np.pi / 2])), [0.0, 0.5, 0.0])

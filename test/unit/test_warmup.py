@@ -9,7 +9,9 @@ import json
 import subprocess
 import sys
 
-from ftplan_testing import SCENES
+from ftplan_testing import ROBOTS, SCENES
+
+from ftplan_ros.core import load_kernels
 
 # In a fresh interpreter: other tests of this process may have compiled any signature.
 _PROBE = '''
@@ -61,3 +63,24 @@ def test_plans_of_every_kind_compile_nothing_after_the_warm_up():
     assert outcomes['crowded_sheets_100.yaml'] == 'recovery_sheets'
     assert outcomes['infeasible.yaml'].startswith('no failure-tolerant plan exists')
     assert {name: found['new'] for name, found in compiled.items() if found['new']} == {}
+
+
+def test_a_robot_is_warmed_once_for_each_task_kind(monkeypatch):
+    """A robot of a thousand shapes took 9 s each time: the nodes warm it off their executor,
+    then their own call must return at once."""
+    from ftplan_ros.core import warmup
+    from ftplan_ros.core.io.scene_file import parse_scene
+
+    def panda():
+        return parse_scene({'robot': 'panda.yaml'}, directory=ROBOTS).robot
+    robot = panda()
+    load_kernels(robot)
+    runs = []
+    monkeypatch.setattr(warmup, '_run_kernels', runs.append)
+    load_kernels(robot)
+    load_kernels(robot.with_task_kind(robot.task_kind))  # the same model for the same kind
+    assert runs == []
+    other_kind, other_model = robot.with_task_kind('position'), panda()
+    load_kernels(other_kind)
+    load_kernels(other_model)
+    assert runs == [other_kind, other_model]

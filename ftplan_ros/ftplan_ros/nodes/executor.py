@@ -3,8 +3,9 @@
     ros2 run ftplan_ros executor --ros-args -p scene_file:=fig3a.yaml
 
 It keeps the last plan from the planner's latched topics (θ_s, the nominal trajectory,
-the S_F web; the nominal path is the web path equal to the trajectory). A call of
-/ftplan/execute (std_srvs/Trigger):
+the S_F web; the nominal path is the web path equal to the trajectory) once its plan
+status has arrived on /ftplan/plan/info (plan_info.py). A call of /ftplan/execute
+(std_srvs/Trigger):
 
 1. approaching: moves the arm to θ_s by the planner's approach (/ftplan/plan/approach)
    when it starts where the arm stands, else by one the core plans now
@@ -19,8 +20,14 @@ the S_F web; the nominal path is the web path equal to the trajectory). A call o
    from where the arm stopped with the joints left (`path_to_goal`), when there is one;
 4. done (at the goal) or failed (with the reason).
 
+A lock event stamped ahead of where the arm is on its command (a drill's scheduled
+failure, injector.py) takes effect when /joint_states show the arm at the point the
+command puts it at that moment (the sim locks it exactly there), not on arrival; any
+other takes effect at once. `lock_progress` in the status is where the arm stood locked,
+as a fraction of the nominal path's length (motion.py): where the lock landed.
+
 A lock of a joint the plan does not tolerate (the planner names the tolerated joints in
-its 'plan' status, plan_info.py) is handled the same way: a recovery path the core
+its plan status) is handled the same way: a recovery path the core
 finds in S_F is safe and is followed; without one the arm stays stopped and the
 execution fails with "joint X is not tolerated by this plan". Arrival is judged with
 the core's task errors against the plan's goal (position [m] and, for axis and pose
@@ -30,22 +37,27 @@ tasks, orientation [rad]). A scene file without a robot takes it from
 Locked joints are remembered in one place (locks.py) whatever the executor is doing,
 idle included, until they are declared repaired (`~/reset`, std_srvs/Trigger); no
 command that would move one is ever published, and an execution is refused while one is
-locked. An execution is also refused when the current obstacles (scene and
-/ftplan/obstacles) touch a vertex of the plan's S_F: the obstacles changed since the
-plan, so plan again. Obstacles that arrive during an execution are checked against the
-rest of the commanded motion (certified) and against S_F: on the approach the arm stops
-and a new approach is planned from where it stands; on the nominal or recovery path it
-stops there safely, and the execution fails with the reason. A second lock in one
-execution stops the arm safely too. When /joint_states stops for `joint_state_timeout`
-during an execution, a watchdog commands a stop and fails it.
+locked. An execution is also refused when the plan was made for another robot than the
+current one (their digests differ: /robot_description replaced it, with the same joint
+names), when obstacle updates were lost (obstacle_topic.py: until a full set arrives),
+and when the current obstacles (scene and /ftplan/obstacles) touch a vertex of the
+plan's S_F: the obstacles changed since the plan, so plan again. Obstacles that arrive
+during an execution are checked against the rest of the commanded motion (certified)
+and against S_F: on the approach the arm stops and a new approach is planned from where
+it stands; on the nominal or recovery path it stops there safely, and the execution
+fails with the reason. Obstacle updates lost during an execution stop the arm too and
+fail it: an obstacle may have come into its way unseen. A second lock in one execution
+stops the arm safely too. When /joint_states stops for `joint_state_timeout` during an
+execution, a watchdog commands a stop and fails it.
 
-Commands go out on /ftplan/joint_command as JointTrajectory (strictly increasing times,
-the first point one step ahead of where the arm is), so a ros2_control
-joint_trajectory_controller can take them (remap the topic); an empty trajectory asks
-for a stop. Every state change, and the progress along the nominal path, is reported on
-/diagnostics as 'ftplan_executor: execution'. A lock before or after the nominal phase,
-a lock of an unknown joint and any malformed input (a joint state stamped before the
-epoch, a lock angle away from where the joint is) are logged and reported, never fatal.
+Commands go out on /ftplan/joint_command as JointTrajectory (stamped with the moment they
+start, strictly increasing times, the first point one step ahead of where the arm is),
+so a ros2_control joint_trajectory_controller can take them (remap the topic); an empty
+trajectory asks for a stop. Every state change, and the progress along the nominal path,
+is reported on /diagnostics as 'ftplan_executor: execution'. A lock before or after the
+nominal phase, a lock of an unknown joint and any malformed input (a joint state stamped
+before the epoch, a lock angle away from where the joint is) are logged and reported,
+never fatal.
 """
 
 from __future__ import annotations
@@ -57,14 +69,15 @@ from enum import StrEnum
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.duration import Duration
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
-from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
+    LockedJoint,
     create_joint_trajectory,
     read_diagnostic_status,
     read_failure_surface,
@@ -82,6 +95,7 @@ from ftplan_ros.core import (
 )
 from ftplan_ros.core.model.angles import configuration_difference
 from ftplan_ros.core.model.paths import cumulative_fractions, point_at_fraction
+from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
 
 from .inputs import read_arm_state
@@ -91,16 +105,17 @@ from .locks import (
     lock_angle_problem,
     read_lock_event,
 )
-from .motion import progress_along, time_path
-from .obstacles import ObstacleSet
+from .motion import fraction_at_time, progress_along, time_at_fraction, time_path
+from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
 from .params import (
     add_validators,
     check_startup_parameters,
     declare,
     destroyed_if_start_fails,
+    non_negative,
     positive,
 )
-from .plan_info import PLANNER_STATUS, PlanInfos, join_names, read_plan_info
+from .plan_info import PlanInfos, join_names, read_plan_info
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
 from .scene_source import SceneSource
@@ -108,22 +123,25 @@ from .spinning import run_node
 from .tasks import bind_task_kind
 from .topics import (
     APPROACH,
-    DIAGNOSTICS,
     EXECUTE_SERVICE,
     EXECUTOR_NODE,
     FAILURE_SURFACE,
     JOINT_COMMAND,
     JOINT_STATES,
     LOCKED_JOINT,
-    OBSTACLES,
+    PLAN_INFO,
     RESET_SERVICE,
     ROBOT_DESCRIPTION,
     START_CONFIGURATION,
     TRAJECTORY,
 )
 
-_DIAGNOSTICS_DEPTH = 50
 _REJECTION_REPORT_PERIOD = 1.0  # [s] a stream of bad joint states: one report per period
+# [s] The sim stops at a scheduled lock's point of the command, read from the command's
+# message, whose times are rounded to nanoseconds: the moment of the arm's position may
+# differ from the lock's by a few nanoseconds.
+_DUE_TOLERANCE = 1e-6
+_LONGEST_LEAD = 1.0  # [s] of the nominal path's command: a longer pause would only stall
 
 
 class State(StrEnum):
@@ -158,6 +176,9 @@ class Execution:
     surface: FailureSurface          # the plan's S_F shifted by whole turns to the arm's lift
     started: float                   # monotonic [s]
     command: np.ndarray | None = None     # (k, n) path being commanded, from where it began
+    command_times: np.ndarray | None = None  # (k,) [s] of the command, from its stamp
+    command_stamp_ns: int = 0        # ROS time [ns] the command starts: its stamp
+    scheduled_lock: tuple[LockedJoint, int, int] | None = None  # event, joint, stamp [ns]
     progress: float = 0.0            # fraction of the nominal path's length done
     locked_joint: int | None = None
     lock_received: float | None = None
@@ -204,7 +225,9 @@ class ExecutorNode(Node):
             self._last_joint_state = 0.0  # monotonic [s] of the last good joint state
             self._last_motion = 0.0  # monotonic [s] of the last joint state that moved
             self._last_rejection_report = 0.0
-            self._obstacles = ObstacleSet(None)
+            self.obstacle_topic = ObstacleTopic(self, self.diagnostics,
+                                                on_update=self._obstacles_updated)
+            self._obstacles = self.obstacle_topic.obstacles
             self._start_msg: JointState | None = None
             self._trajectory_msg: JointTrajectory | None = None
             self._surface_msg: Float64MultiArray | None = None
@@ -249,17 +272,20 @@ class ExecutorNode(Node):
         declare(self, 'approach_time', 1.0,
                 'Budget [s] of each of the three RRT-Connect attempts of an approach (or, '
                 'after a lock during it, of a path to the goal with the joints left).')
+        declare(self, 'nominal_lead', 0.05,
+                'Seconds from sending the command of the nominal path to its start (its '
+                'stamp): time for a drill\'s lock, scheduled on that command (injector), to '
+                'reach the arm before it moves. At most 1 s.')
         declare(self, 'status_rate', 10.0,
                 'Rate [Hz] of the progress reports on /diagnostics while executing (1 Hz when '
                 'idle).', read_only=True)
-        declare(self, 'planner_status', PLANNER_STATUS,
-                'Name of the planner\'s plan status on /diagnostics (task, tolerances and '
-                'tolerated joints of each plan).')
         validators = {name: positive for name in (
             'max_joint_speed', 'arrival_tolerance', 'max_path_offset', 'path_tolerance',
             'stopped_tolerance', 'stop_timeout', 'stop_settle_time', 'start_timeout',
             'status_rate', 'joint_state_timeout', 'stall_timeout', 'lock_angle_tolerance',
             'approach_time')}
+        validators['nominal_lead'] = lambda value: non_negative(value) or (
+            None if value <= _LONGEST_LEAD else f'must be at most {_LONGEST_LEAD} s, got {value}')
         check_startup_parameters(self, validators)
         add_validators(self, validators)
 
@@ -270,8 +296,8 @@ class ExecutorNode(Node):
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
         self.locked_joint_subscription = self.create_subscription(
             JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
-        self.obstacle_subscription = self.create_subscription(
-            MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
+        self.info_subscription = self.create_subscription(
+            DiagnosticArray, PLAN_INFO, self.plan_info_callback, LATCHED_QOS)
         self.start_subscription = self.create_subscription(
             JointState, START_CONFIGURATION, self.start_configuration_callback, LATCHED_QOS)
         self.trajectory_subscription = self.create_subscription(
@@ -280,8 +306,6 @@ class ExecutorNode(Node):
             Float64MultiArray, FAILURE_SURFACE, self.failure_surface_callback, LATCHED_QOS)
         self.approach_subscription = self.create_subscription(
             JointTrajectory, APPROACH, self.approach_callback, LATCHED_QOS)
-        self.diagnostics_subscription = self.create_subscription(
-            DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, _DIAGNOSTICS_DEPTH)
         self.execute_service = self.create_service(
             Trigger, EXECUTE_SERVICE, self.execute_callback, qos_profile=SERVICE_QOS)
         self.reset_service = self.create_service(Trigger, RESET_SERVICE, self.reset_callback,
@@ -301,8 +325,7 @@ class ExecutorNode(Node):
             self.locks = JointLocks(names)
             self.q = self._previous_q = None
         self.scene, self.names = scene, names
-        for problem in problems:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {problem}')
+        self.obstacle_topic.report_rebase(problems)
 
     def _scene_changed(self, scene: Scene) -> None:
         """Take a new robot from /robot_description (stopping an execution under way)."""
@@ -351,7 +374,7 @@ class ExecutorNode(Node):
         self._approach_msg = msg
 
     def _assemble_plan(self) -> None:
-        """Hold a new plan once θ_s, trajectory and S_F of one plan have all arrived."""
+        """Hold a new plan once θ_s, trajectory, S_F and info of one plan have all arrived."""
         start, trajectory, surface = self._start_msg, self._trajectory_msg, self._surface_msg
         if start is None or trajectory is None or surface is None or self.scene is None:
             return
@@ -370,42 +393,46 @@ class ExecutorNode(Node):
         if paths.shape[2] != len(self.names) or paths.shape[1] != len(nominal):
             return  # S_F of another plan; its own is on its way
         matches = np.flatnonzero(np.all(paths == nominal[None], axis=(1, 2)))
-        if len(matches) == 0 or not np.array_equal(nominal[0], theta_s):
-            return
+        if len(matches) == 0 or not np.array_equal(nominal[0], theta_s) or \
+                self.plan_infos.get(key) is None:
+            return  # its S_F or its plan info is still on its way
         self.plan = HeldPlan(key, theta_s, FailureSurface(paths, int(matches[0]), (), ()))
         self.get_logger().info(f'holding plan {key}: {len(nominal)} waypoints, S_F of '
                                f'{paths.shape[0]} paths')
         self.report_status(f'holding plan {key}')
 
-    def diagnostics_callback(self, msg: DiagnosticArray) -> None:
-        """Keep what the planner's plan statuses say about each plan (plan_info.py)."""
-        name = self.get_parameter('planner_status').value
+    def plan_info_callback(self, msg: DiagnosticArray) -> None:
+        """Keep what the planner's plan status says about a plan (plan_info.py)."""
         for status in msg.status:
-            if status.name != name:
-                continue
             try:
                 reading = read_diagnostic_status(status)
-            except ValueError:
+            except ValueError as error:
+                self.diagnostics.rejected('plan', f'ignored {PLAN_INFO}: {error}')
                 continue
             info = read_plan_info(reading.values) if reading.level == 'OK' else None
-            if info is not None:
-                self.plan_infos.add(info)
+            if info is None or info.stamp != stamp_key(msg.header.stamp):
+                self.diagnostics.rejected('plan', f'ignored {PLAN_INFO}: it describes no plan '
+                                          f'stamped {stamp_key(msg.header.stamp)}')
+                continue
+            self.plan_infos.add(info)
+            self._assemble_plan()
 
-    def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Keep the obstacle topic; during an execution, check the rest of the motion."""
-        try:
-            self._obstacles.update(msg)
-        except ValueError as error:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
-                                      f'the {len(self._obstacles)} previous')
+    def _obstacles_updated(self) -> None:
+        """During an execution: stop when updates were lost, else check the rest of the motion."""
+        if self.state not in ACTIVE:
             return
-        if self.state in ACTIVE:
-            try:
-                self._check_new_obstacles()
-            except Exception as error:  # noqa: BLE001 - a callback must never raise
-                self.get_logger().error(traceback.format_exc())
+        try:
+            if self._obstacles.lost:
                 self._stop()
-                self._fail(f'internal executor error: {error!r}')
+                self._fail(f'{self._obstacles.lost} while {self.state.value}: an obstacle may '
+                           f'be in the way unseen, so the arm is stopped where it is; '
+                           f'{FULL_SET_FIX}, then plan again')
+                return
+            self._check_new_obstacles()
+        except Exception as error:  # noqa: BLE001 - a callback must never raise
+            self.get_logger().error(traceback.format_exc())
+            self._stop()
+            self._fail(f'internal executor error: {error!r}')
 
     def _check_new_obstacles(self) -> None:
         """Stop when new obstacles meet the rest of the motion or (before a lock) S_F.
@@ -493,6 +520,9 @@ class ExecutorNode(Node):
             locked = [self.names[j] for j in self.locks.joints]
             return False, (f'{locked} locked ({self.locks.describe()}) and would be commanded: '
                            f'call {self.get_name()}/reset once repaired')
+        problem = self._stale_plan_problem()
+        if problem:
+            return False, problem
         if self._surface_meets_obstacle(self.plan.surface):
             return False, (f'the obstacles changed since plan {self.plan.key}: its failure '
                            'surface now meets one; plan again')
@@ -504,6 +534,17 @@ class ExecutorNode(Node):
         # received so far may predate it (e.g. a reset of the arm just before it).
         self._set_state(State.APPROACHING, 'starting from the next joint state')
         return True, f'execution {self.executions}: plan {self.plan.key} accepted'
+
+    def _stale_plan_problem(self) -> str:
+        """Say why the held plan may not run on the robot and obstacles known now ('' if not)."""
+        if self._obstacles.lost:
+            return f'{self._obstacles.lost}: {FULL_SET_FIX}, then execute again'
+        info = self.plan_infos.get(self.plan.key)
+        robot = robot_digest(self.scene.robot)
+        if info is not None and info.robot != robot:
+            return (f'plan {self.plan.key} was made for robot {info.robot}, but the robot is '
+                    f'now {robot} (from {ROBOT_DESCRIPTION}): plan again')
+        return ''
 
     def _start_motion(self, q: np.ndarray) -> None:
         """Command the approach to θ_s from q (or the nominal path if the arm is there)."""
@@ -563,14 +604,15 @@ class ExecutorNode(Node):
 
     def _begin_nominal(self) -> None:
         ex = self.execution
-        if self._command(ex.nominal):
+        if self._command(ex.nominal, float(self.get_parameter('nominal_lead').value)):
             self._set_state(State.NOMINAL, 'following the nominal path')
 
-    def _command(self, path: np.ndarray) -> bool:
+    def _command(self, path: np.ndarray, lead: float = 0.0) -> bool:
         """Command `path` (k, n), whose first point is where the arm is; False if refused.
 
-        A path that would move a locked joint is never published: the arm is stopped and
-        the execution fails instead (that would be a bug of the executor).
+        The command starts `lead` [s] after now: its stamp. A path that would move a
+        locked joint is never published: the arm is stopped and the execution fails
+        instead (that would be a bug of the executor).
         """
         moved = self.locks.moved(path)
         if moved:
@@ -579,11 +621,13 @@ class ExecutorNode(Node):
                        'is stopped (please report)')
             return False
         speed = float(self.get_parameter('max_joint_speed').value)
-        times = time_path(path, speed)
-        self.execution.command = path
-        self.execution.commanded = time.monotonic()
-        self.command_publisher.publish(
-            create_joint_trajectory(self.names, path[1:], times[1:]))
+        ex = self.execution
+        stamp = self.get_clock().now() + Duration(nanoseconds=round(lead * 1e9))
+        ex.command, ex.command_times = path, time_path(path, speed)
+        ex.command_stamp_ns = stamp.nanoseconds
+        ex.commanded = time.monotonic()
+        self.command_publisher.publish(create_joint_trajectory(
+            self.names, path[1:], ex.command_times[1:], stamp.to_msg()))
         return True
 
     def _stop(self) -> None:
@@ -635,6 +679,11 @@ class ExecutorNode(Node):
         arrival = float(self.get_parameter('arrival_tolerance').value)
         if self.state == State.NOMINAL:
             ex.progress, _ = progress_along(ex.nominal, q)
+        if ex.scheduled_lock is not None and self._lock_due(ex.scheduled_lock[2], q):
+            event, joint, _ = ex.scheduled_lock
+            ex.scheduled_lock = None
+            self._take_lock(event, joint)
+            return
         if ex.command is None:
             if ex.locked_joint is not None:
                 # Joint states sent before the lock may still be queued (the executor takes
@@ -675,14 +724,50 @@ class ExecutorNode(Node):
         self._set_state(State.DONE, f'reached the goal ({how}), error {error}')
 
     def locked_joint_callback(self, msg: JointState) -> None:
-        """Handle a failure: during the nominal phase, stop and prepare the recovery."""
+        """Handle a failure: stop and prepare the recovery, when the lock takes effect.
+
+        That is at once, or, for an event stamped ahead of where the arm is on its command
+        (a drill's scheduled failure), when the arm gets there (`_track`).
+        """
         found = read_lock_event(
             msg, None if self.scene is None else self.names, self.source.waiting,
             lambda why, name: self.diagnostics.rejected(
                 'input', why, None if name is None else {'joint': name}))
         if found is None:
             return
-        event, joint = found
+        event, joint, stamp_ns = found
+        ex = self.execution
+        if self.state in ACTIVE and ex.scheduled_lock is None and \
+                not self._lock_due(stamp_ns, self.q):
+            ex.scheduled_lock = (event, joint, stamp_ns)
+            self.report_status(f'{event.name} locks at {self._fraction_at(stamp_ns):.1%} of '
+                               f'the command under way ({self.state.value}): scheduled',
+                               log=True)
+            return
+        self._take_lock(event, joint)
+
+    def _lock_due(self, stamp_ns: int, q: np.ndarray | None) -> bool:
+        """Whether a lock stamped `stamp_ns` [ns] has taken effect with the arm at q (n,).
+
+        It has once the arm is where its command puts it at that moment, and at once
+        without a command under way (or a joint state). Not by the clock: an arm that
+        took the command late gets there late.
+        """
+        ex = self.execution
+        if ex.command is None or q is None:
+            return True
+        progress, _ = progress_along(ex.command, q)
+        reached = time_at_fraction(ex.command, ex.command_times, progress)
+        return reached >= (stamp_ns - ex.command_stamp_ns) * 1e-9 - _DUE_TOLERANCE
+
+    def _fraction_at(self, stamp_ns: int) -> float:
+        """Return the fraction of the command under way that it commands by `stamp_ns` [ns]."""
+        ex = self.execution
+        return fraction_at_time(ex.command, ex.command_times,
+                                (stamp_ns - ex.command_stamp_ns) * 1e-9)
+
+    def _take_lock(self, event: LockedJoint, joint: int) -> None:
+        """Take the lock of `joint`: remember it; during an execution, stop the arm to recover."""
         current = None if self.q is None else float(self.q[joint])
         problem = lock_angle_problem(event.name, event.angle, current,
                                      bool(self.scene.robot.periodic[joint]),

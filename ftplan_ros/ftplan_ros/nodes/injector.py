@@ -6,13 +6,17 @@
 Each execution of a plan (the executor's 'execution' status on /diagnostics numbers them)
 gets at most one drill, taken in order from:
 
-- `drills`: scheduled drills, one per execution. 'JOINT@F' locks JOINT once the arm has
-  done the fraction F (0..1) of the nominal path's length, measured by projecting
-  /joint_states onto /ftplan/plan/trajectory; 'JOINT@Ts' locks it T seconds after the
-  execution started (which may fall in the approach to θ_s, where no recovery is
-  guaranteed). A drill not fired when the injector learns that the execution ended
-  (reached the goal, failed) is dropped with a warning: a lock after the goal would test
-  no recovery, and the executor would refuse executions until reset.
+- `drills`: scheduled drills, one per execution. 'JOINT@F' locks JOINT when the arm has
+  done the fraction F (0..1) of the nominal path's length (nodes/motion.py): once the
+  executor commands the nominal path (/ftplan/joint_command, equal to
+  /ftplan/plan/trajectory, stamped with its start), the injector publishes the lock event
+  stamped with the moment that command reaches F, and the sim and the executor make it
+  take effect then, exactly there, however late the event arrived (as long as it arrived
+  before). 'JOINT@Ts' locks it T seconds after the execution started (which may fall in
+  the approach to θ_s, where no recovery is guaranteed). A drill not sent when the
+  injector learns that the execution ended (reached the goal, failed) is dropped with a
+  warning: a lock after the goal would test no recovery, and the executor would refuse
+  executions until reset.
 - `random_drills`: then this many executions (-1: all of them) get a Monte Carlo drill,
   a uniformly random joint among those the plan tolerates (the executor's status names
   them, plan_info.py; every joint when it does not) at a uniformly random fraction of
@@ -39,6 +43,7 @@ import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
@@ -46,10 +51,11 @@ from ftplan_msgs_py import (
     create_locked_joint,
     read_diagnostic_status,
     read_joint_trajectory,
+    time_to_nanoseconds,
 )
+from ftplan_ros.core.model.angles import configuration_difference
 
-from .inputs import read_arm_state
-from .motion import progress_along
+from .motion import time_at_fraction
 from .params import (
     add_validators,
     array_parameter,
@@ -68,13 +74,18 @@ from .topics import (
     DIAGNOSTICS,
     EXECUTOR_NODE,
     INJECTOR_NODE,
-    JOINT_STATES,
+    JOINT_COMMAND,
     LOCKED_JOINT,
     TRAJECTORY,
 )
 
+# [rad] How far a command may be from the nominal path and still be it (the executor sends
+# the very numbers of /ftplan/plan/trajectory, shifted by whole turns at most).
+_SAME_PATH = 1e-9
 _DRILL = re.compile(r'^\s*([^@\s]+)\s*@\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s?)\s*$')
 _RUNNING = ('approaching', 'nominal')
+# How far from its fraction of the nominal path a drill's lock may land and count as drilled.
+DRILL_TOLERANCE = 0.02
 
 
 @dataclass(frozen=True)
@@ -88,6 +99,31 @@ class Drill:
     def __str__(self) -> str:
         return f'{self.joint}@{self.seconds:.3g}s' if self.seconds is not None else \
             f'{self.joint}@{self.fraction:.3g}'
+
+    def missed(self, locked_joint: str, lock_phase: str, landed: float) -> str:
+        """Say how a run's lock missed this drill ('' when it was drilled as asked).
+
+        The arguments are the executor's report of the run: the joint that locked ('' for
+        none), the phase it locked in, and `landed`, the fraction of the nominal path
+        where the arm stood locked (NaN if not reported). A fraction drill must lock its
+        joint on the nominal path within DRILL_TOLERANCE of its fraction; a drill in
+        seconds must lock its joint during the execution.
+        """
+        if not locked_joint:
+            return 'no lock during the execution'
+        if locked_joint != self.joint:
+            return f'{locked_joint} locked, not {self.joint}'
+        if self.fraction is None:
+            return ''
+        if lock_phase != 'nominal':
+            return f'the lock landed while {lock_phase or "in an unknown phase"}, not on ' \
+                'the nominal path'
+        if not np.isfinite(landed):
+            return 'the executor did not report where the lock landed'
+        if abs(landed - self.fraction) <= DRILL_TOLERANCE:
+            return ''
+        after = ': after the motion' if landed >= 1.0 else ''
+        return f'lock landed at {landed:.1%}{after}, asked {self.fraction:.1%}'
 
 
 def parse_drill(text: str, joint_names: Sequence[str] | None) -> Drill:
@@ -109,6 +145,23 @@ def parse_drill(text: str, joint_names: Sequence[str] | None) -> Drill:
         raise ValueError(f'drill {text!r}: the fraction of the path must be in [0, 1]; '
                          'add "s" for seconds')
     return Drill(joint, fraction=number)
+
+
+def lock_moment(nominal: np.ndarray, positions: np.ndarray, times: np.ndarray,
+                stamp_ns: int, fraction: float, periodic: np.ndarray) -> int | None:
+    """Return when [ns, ROS time] a command reaches `fraction` of the nominal path (k, n).
+
+    The command holds positions (k - 1, n) [rad] at times (k - 1,) [s] from `stamp_ns`:
+    the executor commands the nominal path from its first point, where the arm stands, so
+    it sends the points after it (whole turns of `periodic` joints apart, in the arm's
+    lift). None when the command is not the nominal path.
+    """
+    if len(positions) == 0 or positions.shape != (len(nominal) - 1, nominal.shape[1]) or \
+            np.max(np.abs(configuration_difference(positions, nominal[1:], periodic))) > \
+            _SAME_PATH:
+        return None
+    seconds = time_at_fraction(nominal, np.concatenate([[0.0], times]), fraction)
+    return stamp_ns + round(seconds * 1e9)
 
 
 def random_drill(rng: np.random.Generator, joint_names: Sequence[str]) -> Drill:
@@ -159,6 +212,7 @@ class InjectorNode(Node):
             self.nominal: np.ndarray | None = None
             self.tolerated: tuple[str, ...] = ()  # of the execution's plan, from its status
             self._trajectory_msg: JointTrajectory | None = None
+            self._command_msg: JointTrajectory | None = None  # the last, since arming
             self._drill_timer = None
             self._lock_now_clearer = self.create_timer(0.0, self._clear_lock_now)
             self._lock_now_clearer.cancel()
@@ -166,8 +220,8 @@ class InjectorNode(Node):
             self.lock_publisher = self.create_publisher(JointState, LOCKED_JOINT, EVENT_QOS_DEPTH)
             self.status_subscription = self.create_subscription(
                 DiagnosticArray, DIAGNOSTICS, self.diagnostics_callback, EVENT_QOS_DEPTH)
-            self.joint_state_subscription = self.create_subscription(
-                JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
+            self.command_subscription = self.create_subscription(
+                JointTrajectory, JOINT_COMMAND, self.command_callback, EVENT_QOS_DEPTH)
             self.trajectory_subscription = self.create_subscription(
                 JointTrajectory, TRAJECTORY, self.trajectory_callback, LATCHED_QOS)
             if self.queue or self.random_left:
@@ -259,15 +313,12 @@ class InjectorNode(Node):
         if execution != self.execution:
             return
         previous, self.state = self.state, state
-        if not self.pending or state == previous:
-            return
-        if state == 'nominal' and self.drill.fraction == 0.0:
-            self._fire('at the start of the nominal path')
-        elif state not in _RUNNING:
+        if self.pending and state != previous and state not in _RUNNING:
             self._disarm(f'execution {execution} became {state} first')
 
     def _arm(self) -> None:
         self._disarm()
+        self._command_msg = None  # commands so far were for earlier executions
         if self.queue:
             self.drill = self.queue.pop(0)
         elif self.random_left != 0 and self.names is not None:
@@ -301,30 +352,43 @@ class InjectorNode(Node):
         if self.pending and self.state in _RUNNING:
             self._fire(f'{time.monotonic() - self._drill_started:.2f} s after the start')
 
-    def joint_state_callback(self, msg: JointState) -> None:
-        """Fire a fraction drill once the arm has done its share of the nominal path."""
-        if not self.pending or self.state != 'nominal' or self.drill.fraction is None or \
+    def command_callback(self, msg: JointTrajectory) -> None:
+        """Schedule a fraction drill on the executor's command of the nominal path."""
+        self._command_msg = msg
+        self._schedule()
+
+    def _schedule(self) -> None:
+        """Once the nominal path is commanded, send the lock stamped with its moment."""
+        msg = self._command_msg
+        if not self.pending or self.drill.fraction is None or msg is None or \
                 self.nominal is None or self.names is None:
             return
         try:
-            q, _ = read_arm_state(msg, self.scene.robot, self.names)
+            positions, times = read_joint_trajectory(msg, self.names)
+            stamp_ns = time_to_nanoseconds(msg.header.stamp) or \
+                self.get_clock().now().nanoseconds  # unstamped: it starts on arrival
         except ValueError:
-            return  # a drill waits for the arm's own joint states
-        progress, _ = progress_along(self.nominal, q, self.scene.robot.periodic)
-        if progress >= self.drill.fraction:
-            self._fire(f'at {progress:.1%} of the nominal path')
+            return  # not a command of this arm; the executor reports bad ones
+        moment = lock_moment(self.nominal, positions, times, stamp_ns, self.drill.fraction,
+                             self.scene.robot.periodic)
+        if moment is not None:
+            self._fire(f'at {self.drill.fraction:.1%} of the nominal path, '
+                       f'{(moment - stamp_ns) * 1e-9:.3f} s after its start',
+                       Time(nanoseconds=moment, clock_type=self.get_clock().clock_type))
 
     # Output -------------------------------------------------------------------------
 
-    def _fire(self, when: str) -> None:
+    def _fire(self, when: str, at: Time | None = None) -> None:
         self.pending = False
         self.publish_lock(self.drill.joint, f'execution {self.execution}: drill {self.drill} '
-                          f'{when}', {'execution': self.execution, 'drill': str(self.drill)})
+                          f'{when}', {'execution': self.execution, 'drill': str(self.drill)},
+                          at)
 
-    def publish_lock(self, joint: str, why: str, values: dict | None = None) -> None:
-        """Publish the event that locks `joint` where it is, and report it."""
-        self.lock_publisher.publish(
-            create_locked_joint(joint, stamp=self.get_clock().now().to_msg()))
+    def publish_lock(self, joint: str, why: str, values: dict | None = None,
+                     at: Time | None = None) -> None:
+        """Publish the event that locks `joint` where it is, now or `at` (ROS time); report it."""
+        at = at or self.get_clock().now()
+        self.lock_publisher.publish(create_locked_joint(joint, stamp=at.to_msg()))
         self.diagnostics.report('drills', 'OK', f'locked {joint}: {why}',
                                 {'joint': joint, **(values or {})}, log=True)
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from sensor_msgs.msg import JointState
 
-from ftplan_msgs_py import LockedJoint, read_locked_joint
+from ftplan_msgs_py import LockedJoint, read_locked_joint, time_to_nanoseconds
 from ftplan_ros.core.model.angles import configuration_difference
 
 LOCKED_TOLERANCE = 1e-9  # [rad] a command may differ this much from a locked joint's angle
@@ -35,14 +35,17 @@ class Lock:
 
 def read_lock_event(msg: JointState, names: Sequence[str] | None, waiting: str,
                     reject: Callable[[str, str | None], None],
-                    ) -> tuple[LockedJoint, int] | None:
-    """Read a locked-joint event and its joint's index among `names`, or refuse it.
+                    ) -> tuple[LockedJoint, int, int] | None:
+    """Read a locked-joint event, its joint's index among `names` and its stamp [ns], or refuse it.
 
-    `names` is None while the node has no scene (`waiting` says what it waits for). A
-    refusal calls `reject(why, the joint's name or None)` and returns None.
+    The stamp is when the joint locks: 0 (unstamped) or one already past means at once;
+    one ahead schedules the failure (a drill), to take effect when the arm's command
+    reaches that moment. `names` is None while the node has no scene (`waiting` says what
+    it waits for). A refusal calls `reject(why, the joint's name or None)` and returns None.
     """
     try:
         event = read_locked_joint(msg)
+        stamp_ns = time_to_nanoseconds(msg.header.stamp)
     except ValueError as error:
         reject(f'ignored locked-joint event: {error}', None)
         return None
@@ -53,7 +56,7 @@ def read_lock_event(msg: JointState, names: Sequence[str] | None, waiting: str,
         reject(f'ignored lock of unknown joint {event.name!r}; the arm has {list(names)}',
                event.name)
         return None
-    return event, list(names).index(event.name)
+    return event, list(names).index(event.name), stamp_ns
 
 
 def lock_angle_problem(name: str, angle: float | None, current: float | None,

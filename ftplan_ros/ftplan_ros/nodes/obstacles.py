@@ -13,7 +13,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy.spatial.transform import Rotation
-from visualization_msgs.msg import MarkerArray
+from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import ObstacleKey, ObstacleShape, read_obstacle_markers
 from ftplan_ros.core import CollisionChecker, Obstacle, Scene
@@ -69,12 +69,22 @@ def obstacle_set_key(obstacles: Sequence[Obstacle]) -> str:
     return hashlib.sha1(text.encode(), usedforsecurity=False).hexdigest()[:12]
 
 
+def is_full_set(msg: MarkerArray) -> bool:
+    """Whether a MarkerArray replaces the whole set: it holds a DELETEALL (normally first)."""
+    return any(marker.action == Marker.DELETEALL for marker in msg.markers)
+
+
 class ObstacleSet:
     """The obstacles received on /ftplan/obstacles, keyed (ns, id) as RViz keys markers.
 
     They add to the static obstacles of a base scene; `checker` checks against both.
     Without a base scene yet (a robot to come from /robot_description) the marker arrays
     wait, in order, and are applied when `rebase` gives one.
+
+    Updates must all be applied, in order: `lost` says why the set is not the one
+    published when some were not received ('' when it is). It is set by an update that
+    comes after lost ones (`update`'s `lost`) and cleared by a full set (`is_full_set`)
+    applied after them.
     """
 
     def __init__(self, base: Scene | None):
@@ -82,28 +92,42 @@ class ObstacleSet:
         self.shapes: Mapping[ObstacleKey, ObstacleShape] = {}
         self.obstacles: tuple[Obstacle, ...] = ()
         self.checker = None if base is None else CollisionChecker(base.robot, base.obstacles)
-        self._waiting: list[MarkerArray] = []
+        self.lost = ''
+        self._waiting: list[tuple[MarkerArray, str]] = []
 
     @property
     def frame_id(self) -> str | None:
         """The base frame the markers must be in (None before there is a base scene)."""
         return None if self.base is None else self.base.frame_id
 
-    def update(self, msg: MarkerArray) -> None:
+    def update(self, msg: MarkerArray, lost: str = '') -> None:
         """Apply a MarkerArray (ADD, DELETE, DELETEALL); all or nothing.
 
+        :param lost: why updates before this one were lost ('' when none were).
         :raises ValueError: on a malformed marker; the set is then left as it was.
         """
         if self.base is None:
-            self._waiting = self._waiting[-(_MAX_WAITING - 1):] + [msg]
+            self._wait(msg, lost)
             return
-        self._apply(msg)
+        self._apply(msg, lost)
         self.checker = CollisionChecker(self.base.robot, self.scene().obstacles)
 
-    def _apply(self, msg: MarkerArray) -> None:
+    def _wait(self, msg: MarkerArray, lost: str) -> None:
+        self._waiting.append((msg, lost))
+        if len(self._waiting) > _MAX_WAITING:
+            del self._waiting[0]
+            first, first_lost = self._waiting[0]
+            self._waiting[0] = (first, first_lost or f'obstacle updates were lost (more than '
+                                f'{_MAX_WAITING} arrived before the robot: the oldest were '
+                                'dropped)')
+
+    def _apply(self, msg: MarkerArray, lost: str) -> None:
+        self.lost = lost or self.lost
         shapes = read_obstacle_markers(msg, self.base.frame_id, self.shapes)
         obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
         self.shapes, self.obstacles = shapes, obstacles
+        if is_full_set(msg):
+            self.lost = ''
 
     def rebase(self, base: Scene) -> list[str]:
         """Add the obstacles to a new base scene (a new robot).
@@ -113,9 +137,9 @@ class ObstacleSet:
         self.base = base
         waiting, self._waiting = self._waiting, []
         problems = []
-        for msg in waiting:
+        for msg, lost in waiting:
             try:
-                self._apply(msg)
+                self._apply(msg, lost)
             except ValueError as error:
                 problems.append(str(error))
         self.checker = CollisionChecker(base.robot, self.scene().obstacles)

@@ -1,8 +1,10 @@
-"""What a plan is for, beyond its latched topics: the planner's status on /diagnostics.
+"""What a plan is for, beyond its joint data: the planner's plan status.
 
-The latched topics carry θ_s, the joint path and S_F. The task they were planned for,
-its tolerances and the joints whose lock the plan tolerates are values of the planner's
-status 'ftplan_planner: plan' (stamped like the plan):
+The latched topics carry θ_s, the joint path and S_F. The robot and the obstacles they
+were planned for, the task, its tolerances and the joints whose lock the plan tolerates
+are values of the planner's status 'ftplan_planner: plan' on /diagnostics, which also
+goes out latched on /ftplan/plan/info (a DiagnosticArray stamped like the plan) for
+nodes that join late:
 
 | key | value |
 |---|---|
@@ -11,11 +13,13 @@ status 'ftplan_planner: plan' (stamped like the plan):
 | `start`, `goal` | task points '[x, y, ...]' (task_space.py) |
 | `tolerance`, `orientation_tolerance` | [m], [rad] |
 | `tolerated_joints` | joint names, comma-separated (e.g. 'joint1,joint3') |
+| `robot` | a digest of the robot's model (core robot_digest): joints, limits, geometry |
 | `obstacles`, `obstacle_set` | how many obstacles, and a digest naming them (obstacles.py) |
 | `approach` | how the arm gets to θ_s from where it stood (core/approach.py) |
 
-The executor reads them to judge arrival and to name an untolerated lock, and repeats
-`tolerated_joints` in its execution status, which the injector reads for random drills.
+The executor reads them from /ftplan/plan/info to tell a plan for another robot, to
+judge arrival and to name an untolerated lock, and repeats `tolerated_joints` in its
+execution status, which the injector reads for random drills.
 """
 
 from __future__ import annotations
@@ -26,8 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ftplan_ros.core import Task
+from ftplan_ros.core import Obstacle, Robot, Task
+from ftplan_ros.core.model.robot import robot_digest
 
+from .obstacles import obstacle_set_key
 from .reporting import parse_vector
 
 PLANNER_STATUS = 'ftplan_planner: plan'
@@ -45,9 +51,11 @@ def split_names(text: str) -> tuple[str, ...]:
 
 @dataclass(frozen=True, eq=False)
 class PlanInfo:
-    """A plan's task (task points, tolerances [m], [rad]) and tolerated joints."""
+    """What a plan is for: robot, obstacles, task, tolerances [m], [rad], tolerated joints."""
 
     stamp: str
+    robot: str
+    obstacle_set: str
     task_kind: str
     start: np.ndarray
     goal: np.ndarray
@@ -67,10 +75,13 @@ def format_point(values) -> str:
     return '[' + ', '.join(repr(float(v)) for v in values) + ']'
 
 
-def plan_info_values(task: Task, tolerated: Sequence[str]) -> dict[str, object]:
-    """Return the status values that describe a plan's task (the table above, no stamp)."""
-    return {'task_kind': task.kind, 'start': format_point(task.start),
-            'goal': format_point(task.goal), 'tolerance': task.goal_tolerance,
+def plan_info_values(robot: Robot, obstacles: Sequence[Obstacle], task: Task,
+                     tolerated: Sequence[str]) -> dict[str, object]:
+    """Return the status values that describe a plan (the table above, bar stamp, approach)."""
+    return {'robot': robot_digest(robot), 'obstacles': len(obstacles),
+            'obstacle_set': obstacle_set_key(obstacles), 'task_kind': task.kind,
+            'start': format_point(task.start), 'goal': format_point(task.goal),
+            'tolerance': task.goal_tolerance,
             'orientation_tolerance': task.orientation_tolerance,
             'tolerated_joints': join_names(tolerated)}
 
@@ -81,7 +92,8 @@ def read_plan_info(values: Mapping[str, str]) -> PlanInfo | None:
     Every number must be finite, and the tolerances positive.
     """
     try:
-        info = PlanInfo(values['stamp'], values['task_kind'],
+        info = PlanInfo(values['stamp'], values['robot'], values['obstacle_set'],
+                        values['task_kind'],
                         np.array(parse_vector(values['start'])),
                         np.array(parse_vector(values['goal'])), float(values['tolerance']),
                         float(values['orientation_tolerance']),

@@ -22,9 +22,17 @@ after the response on /ftplan/plan/start_configuration (θ_s, stamped like the P
 /ftplan/plan/trajectory (the nominal joint path, timed by `max_joint_speed`, stamped
 likewise), /ftplan/plan/failure_surface (S_F) and /ftplan/plan/approach, and 50 ms later
 on /ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does).
-Its task, tolerances, tolerated joints, obstacle set and approach are values of the
-'ftplan_planner: plan' status (plan_info.py). A failed request leaves the last good
-plan's topics as they were.
+Its robot (a digest of the model), obstacle set (a digest), task, tolerances, tolerated
+joints and approach are values of the 'ftplan_planner: plan' status (plan_info.py), which
+also goes out latched, stamped like the plan, on /ftplan/plan/info. A failed request
+leaves the last good plan's topics as they were.
+
+Obstacle updates are applied one by one, in order (obstacle_topic.py); while some were
+lost, every request is refused with the reason until a full set (a MarkerArray whose
+first marker is DELETEALL) arrives. A plan is made for the obstacles of the moment its
+planning starts, and its status names them (`obstacle_set`); when /robot_description
+replaces the robot while it plans, the request is refused: the plan would be for a
+robot that is gone.
 
 The arm where it stands (`approach`, default on): with a joint state, the planner prefers
 a θ_s the arm reaches from it along M_s^F (the end effector staying at x_s), else one a
@@ -32,24 +40,29 @@ collision-free joint move reaches (core/approach.py), and publishes that approac
 and stamped like the plan, on /ftplan/plan/approach (no points: none found, or no joint
 state); the status says how it goes (`approach`). The approach is not failure-tolerant.
 
-Requests wait in a queue of SERVICE_QUEUE_DEPTH (qos.py) and are planned one at a time;
-`plan_timeout` [s] bounds each: the search stops at its next stage past it and the
-request is answered with an empty Path and the reason.
+Requests wait in a queue of SERVICE_QUEUE_DEPTH (qos.py). With `plan_workers` = 0 they
+are planned one at a time in the node's process; with N >= 1, N at a time in N worker
+processes (plan_pool.py), a worker that crashes failing its request only. `plan_timeout`
+[s] bounds each: the search stops at its next stage past it (a worker still busy
+OVERRUN_GRACE later is stopped) and the request is answered with an empty Path and the
+reason.
 
 A scene file without a robot takes it from /robot_description (scene_source.py); until
 then every request is refused with "waiting for /robot_description".
 
-Planning runs in its own callback group, so joint states and obstacles keep flowing
-while it works on a MultiThreadedExecutor.
+Planning runs in its own callback group (as many callbacks at once as there are workers),
+so joint states and obstacles keep flowing while it works on a MultiThreadedExecutor.
 """
 
 from __future__ import annotations
 
+import os
 import threading
-import time
 import traceback
+from collections import deque
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
@@ -63,6 +76,8 @@ from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
     DEFAULT_JOINT_SPACE_FRAME,
+    create_diagnostic_array,
+    create_diagnostic_status,
     create_failure_surface,
     create_joint_state,
     create_joint_trajectory,
@@ -75,24 +90,23 @@ from ftplan_msgs_py import (
 from ftplan_ros.core import (
     InputError,
     ManifoldCache,
-    PlannerOptions,
     PlanResult,
     Robot,
     Scene,
     Task,
-    VerificationOptions,
     load_kernels,
-    plan,
 )
 from ftplan_ros.core.grid.free_components import PROOF_GRIDS, START_GRIDS
 from ftplan_ros.core.io.scene_file import parse_tolerated
+from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.core.model.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
-from ftplan_ros.core.planning.approach import Approach, ApproachOptions, plan_from
+from ftplan_ros.core.planning.approach import Approach
 from ftplan_ros.core.planning.planner import check_plannable
 
 from .inputs import read_arm_state
 from .motion import time_path
-from .obstacles import ObstacleSet, obstacle_set_key, shape_from_obstacle
+from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
+from .obstacles import shape_from_obstacle
 from .params import (
     add_validators,
     array_parameter,
@@ -104,10 +118,12 @@ from .params import (
     positive,
 )
 from .plan_info import join_names, plan_info_values
+from .plan_jobs import PlanJob, PlanSettings, PlanTimeout, run_job
+from .plan_pool import PlanPool, PlanWorkerError
 from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
 from .reporting import Diagnostics, format_vector, stamp_key
 from .scene_source import SceneSource
-from .spinning import run_node
+from .spinning import BoundedCallbackGroup, run_node
 from .tasks import (
     bind_task_kind,
     check_task_kind,
@@ -119,10 +135,11 @@ from .topics import (
     APPROACH,
     FAILURE_SURFACE,
     JOINT_STATES,
-    OBSTACLES,
+    PLAN_INFO,
     PLAN_MARKERS,
     PLAN_SERVICE,
     PLANNER_NODE,
+    ROBOT_DESCRIPTION,
     START_CONFIGURATION,
     TRAJECTORY,
 )
@@ -136,39 +153,53 @@ MARKER_WEB_SIZE = 40  # paths and waypoints of S_F drawn at most (~6000 marker p
 # [m] GetPlan.tolerance is a float32: below its smallest normal number a tolerance has
 # lost its digits on the way (and one below 1.4e-45 arrives as 0, the scene's).
 SMALLEST_TOLERANCE = float(np.finfo(np.float32).tiny)
+# Plan in the node's process (README, "Plans side by side": workers pay little on shared cores).
+DEFAULT_PLAN_WORKERS = 0
 
 
 class RequestError(ValueError):
     """A request field the planner cannot use; the message names it."""
 
 
-class PlanTimeout(Exception):  # noqa: N818 - a stop signal, not an error of the caller
-    """Raised from the core's progress hook once a request has used up `plan_timeout`."""
+class StaleInputError(Exception):
+    """The obstacles or the robot are not those published (updates lost, robot replaced)."""
 
 
 class PlannerNode(Node):
     """Serve GetPlan with the core planner over the scene plus the obstacle topic."""
 
     def __init__(self, **kwargs):
+        self.pool: PlanPool | None = None  # before anything that may fail: destroy_node ends it
         with destroyed_if_start_fails(self):
             super().__init__(PLANNER_NODE, **kwargs)
             self.diagnostics = Diagnostics(self)
             self._lock = threading.Lock()
             self.cache = ManifoldCache()
             self.scene: Scene | None = None
-            self._obstacles = ObstacleSet(None)
+            self.obstacle_topic = ObstacleTopic(self, self.diagnostics, lock=self._lock,
+                                                log=True)
+            self._obstacles = self.obstacle_topic.obstacles
             self._joint_state: np.ndarray | None = None
             self._joint_state_problem = 'no joint state received yet on /joint_states'
             self._early_joint_state: JointState | None = None  # arrived before the robot
-            self._pending_results: tuple | None = None
+            self._pending_results: deque[tuple] = deque()  # plans whose results go out next
             self._pending_markers: tuple | None = None
             self.source = SceneSource(self, self.diagnostics, self._scene_changed)
             self._declare_parameters()
+            workers = self.get_parameter('plan_workers').value
+            self.pool = PlanPool(workers) if workers else None
             if self.source.scene is not None:
                 self._check_scene_parameters(self.source.scene)  # a bad one stops the start
                 self._use_scene(self.source.scene)
             self._create_interfaces()
-            self.get_logger().info(f'serving {PLAN_SERVICE}')
+            self.get_logger().info(f'serving {PLAN_SERVICE}' + (
+                f' with {workers} plan workers' if workers else ''))
+
+    def destroy_node(self) -> None:
+        """End the plan workers, then the node."""
+        if self.pool is not None:
+            self.pool.close()
+        super().destroy_node()
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,
@@ -192,8 +223,11 @@ class PlannerNode(Node):
                       '`tolerate`, else every joint).')
         declare(self, 'plan_timeout', 30.0,
                 'Longest a request may plan [s]; past it the search stops at its next stage '
-                'and the request is refused with the reason (requests wait in a queue, one '
-                'planned at a time).')
+                'and the request is refused with the reason.')
+        declare(self, 'plan_workers', DEFAULT_PLAN_WORKERS,
+                'Worker processes that plan requests side by side (read-only), at most one '
+                'per core; 0: one request at a time in the node\'s process. Requests past '
+                'them wait in a queue.', read_only=True)
         declare(self, 'approach', True,
                 'Plan for the arm where it stands: prefer a theta_s reachable from the '
                 'latest joint state along M_s^F, else by a joint move, and publish the '
@@ -207,6 +241,7 @@ class PlannerNode(Node):
                 'narrower gaps but takes longer and more memory (384: about 1 s and 0.4 GB).')
         validators = {'max_joint_speed': positive, 'margin': non_negative,
                       'seed': non_negative, 'plan_timeout': positive,
+                      'plan_workers': _check_plan_workers,
                       'approach_time': positive,
                       'approach_proof_cells': _check_proof_cells,
                       'joint_space_frame': lambda v: None if v else 'must not be empty',
@@ -220,8 +255,7 @@ class PlannerNode(Node):
     def _create_interfaces(self) -> None:
         self.joint_state_subscription = self.create_subscription(
             JointState, JOINT_STATES, self.joint_state_callback, EVENT_QOS_DEPTH)
-        self.obstacle_subscription = self.create_subscription(
-            MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
+        self.info_publisher = self.create_publisher(DiagnosticArray, PLAN_INFO, LATCHED_QOS)
         self.start_publisher = self.create_publisher(
             JointState, START_CONFIGURATION, LATCHED_QOS)
         self.trajectory_publisher = self.create_publisher(
@@ -231,7 +265,7 @@ class PlannerNode(Node):
         self.approach_publisher = self.create_publisher(JointTrajectory, APPROACH, LATCHED_QOS)
         self.markers_publisher = self.create_publisher(MarkerArray, PLAN_MARKERS, LATCHED_QOS)
         # Planning is slow: its own group keeps the subscriptions flowing meanwhile.
-        self.plan_group = MutuallyExclusiveCallbackGroup()
+        self.plan_group = BoundedCallbackGroup(self.pool.size if self.pool else 1)
         self.plan_service = self.create_service(
             GetPlan, PLAN_SERVICE, self.plan_callback, qos_profile=SERVICE_QOS,
             callback_group=self.plan_group)
@@ -291,19 +325,25 @@ class PlannerNode(Node):
         return bind_task_kind(scene.robot, self.get_parameter('task_kind').value)
 
     def _use_scene(self, scene: Scene) -> None:
-        """Plan with `scene` from now on (its robot is new: forget the old joint state)."""
+        """Plan with `scene` from now on (its robot is new: forget the old joint state).
+
+        Whoever plans (the workers, else this process) loads the robot's kernels first.
+        """
         try:
-            load_kernels(self._task_robot(scene))
+            robot = self._task_robot(scene)
         except InputError:
-            load_kernels(scene.robot)
+            robot = scene.robot
+        if self.pool is not None:
+            self.pool.use_robot(robot)
+        else:
+            load_kernels(robot)
         with self._lock:
             problems = self._obstacles.rebase(scene)
             self.scene = scene
             self.cache = ManifoldCache()
             self._joint_state = None
             early, self._early_joint_state = self._early_joint_state, None
-        for problem in problems:
-            self.diagnostics.rejected('obstacles', f'ignored obstacle markers: {problem}')
+        self.obstacle_topic.report_rebase(problems)
         if early is not None:
             self.joint_state_callback(early)
 
@@ -357,28 +397,6 @@ class PlannerNode(Node):
             self.diagnostics.report('joint_states', 'OK', 'receiving joint states',
                                     {'configuration': format_vector(q)})
 
-    def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Apply obstacle markers; malformed ones are reported and the old set kept."""
-        with self._lock:
-            try:
-                self._obstacles.update(msg)
-            except ValueError as error:
-                kept = len(self._obstacles)
-                problem = f'ignored obstacle markers: {error}; keeping the {kept} previous'
-                error_seen = True
-            else:
-                kept = len(self._obstacles)
-                error_seen = False
-            waiting = self._obstacles.pending
-        if error_seen:
-            self.diagnostics.rejected('obstacles', problem, {'obstacles': kept})
-        elif waiting:
-            self.diagnostics.report('obstacles', 'OK', f'{waiting} obstacle marker arrays '
-                                    'wait for the robot', {'obstacles': kept}, log=True)
-        else:
-            self.diagnostics.report('obstacles', 'OK', f'{kept} obstacles from {OBSTACLES}',
-                                    {'obstacles': kept}, log=True)
-
     # The service --------------------------------------------------------------------
 
     def plan_callback(self, request: GetPlan.Request, response: GetPlan.Response,
@@ -393,18 +411,24 @@ class PlannerNode(Node):
         try:
             scene, q = self._request_scene(request)
             task = scene.task
-            values.update(plan_info_values(task, [scene.robot.joint_names[i]
-                                                  for i in scene.tolerated_joints]),
-                          obstacles=len(scene.obstacles),
-                          obstacle_set=obstacle_set_key(scene.obstacles))
-            result, approach = self._plan(scene, q, time.monotonic() + timeout)
+            values.update(plan_info_values(scene.robot, scene.obstacles, task, [
+                scene.robot.joint_names[i] for i in scene.tolerated_joints]))
+            result, approach = self._plan(scene, q, timeout)
+            self._check_robot_kept(values['robot'])
         except (InputError, RequestError) as error:
             self._report_failure(f'bad plan request: {error}', values)
+            return response
+        except StaleInputError as error:
+            self._report_failure(str(error), values)
             return response
         except PlanTimeout:
             self._report_failure(f'no answer within plan_timeout = {timeout:g} s: the search '
                                  'was stopped; raise plan_timeout or simplify the request',
                                  values)
+            return response
+        except PlanWorkerError as error:
+            self.get_logger().error(traceback.format_exc())
+            self._report_failure(f'internal planner error: {error}', values, 'ERROR')
             return response
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             self.get_logger().error(traceback.format_exc())
@@ -421,26 +445,23 @@ class PlannerNode(Node):
         response.plan = self._publish_plan(scene, result, approach, stamp, values)
         return response
 
-    def _plan(self, scene: Scene, q: np.ndarray | None, deadline: float,
+    def _plan(self, scene: Scene, q: np.ndarray | None, timeout: float,
               ) -> tuple[PlanResult, Approach | None]:
         """Plan the request's scene; with q, for the arm standing there (plan_from).
 
-        Raises PlanTimeout at the first stage of the search that starts past `deadline`
-        (monotonic [s]).
+        In a plan worker when there are any, else here. Raises PlanTimeout at the first
+        stage of the search that starts `timeout` [s] after the planning did,
+        PlanWorkerError when the worker failed.
         """
-        def progress(line: str) -> None:
-            if time.monotonic() > deadline:
-                raise PlanTimeout(line)
-
-        margin = float(self.get_parameter('margin').value)
-        options = PlannerOptions(verification=VerificationOptions(margin=margin))
-        rng = np.random.default_rng(int(self.get_parameter('seed').value))
-        if q is None or not self.get_parameter('approach').value:
-            return plan(scene, options, rng, progress, cache=self.cache), None
-        reachable = plan_from(scene, q, options, rng, progress, self.cache, ApproachOptions(
-            margin=margin, rrt_time=float(self.get_parameter('approach_time').value),
-            proof_cells=int(self.get_parameter('approach_proof_cells').value)))
-        return reachable.result, reachable.approach
+        job = PlanJob(scene, q, PlanSettings(
+            margin=float(self.get_parameter('margin').value),
+            seed=int(self.get_parameter('seed').value),
+            approach=bool(self.get_parameter('approach').value),
+            approach_time=float(self.get_parameter('approach_time').value),
+            proof_cells=int(self.get_parameter('approach_proof_cells').value)), timeout)
+        if self.pool is not None:
+            return self.pool.run(job)
+        return run_job(job, self.cache)
 
     def _request_scene(self, request: GetPlan.Request) -> tuple[Scene, np.ndarray | None]:
         """Build the scene (static + topic obstacles) with the request's task, or raise.
@@ -451,8 +472,11 @@ class PlannerNode(Node):
             q = self._joint_state
             joint_state_problem = self._joint_state_problem
             scene = self._obstacles.scene()
+            lost = self._obstacles.lost
         if scene is None:
             raise InputError('robot', self.source.waiting)
+        if lost:
+            raise StaleInputError(f'{lost}: {FULL_SET_FIX}, then plan again')
         robot = self._task_robot(scene)
         kind = robot.task_kind
         if request.start.header.frame_id == '':
@@ -484,6 +508,14 @@ class PlannerNode(Node):
                                     robot.joint_names)
         task = Task(tuple(x_s.tolist()), tuple(x_g.tolist()), tolerance, angle)
         return scene.with_task(task).with_tolerated(tolerated), q
+
+    def _check_robot_kept(self, planned: str) -> None:
+        """Raise StaleInputError when the robot is no longer the one of digest `planned`."""
+        now = robot_digest(self.scene.robot)
+        if now != planned:
+            raise StaleInputError(f'{ROBOT_DESCRIPTION} replaced the robot while it was '
+                                  f'planned for: the plan is for robot {planned}, the robot '
+                                  f'is now {now}; plan again')
 
     def _scene_goal(self, scene: Scene, kind: str) -> np.ndarray:
         """Return the scene's task goal as a task point of `kind`, or raise InputError."""
@@ -527,22 +559,36 @@ class PlannerNode(Node):
         positions, orientations = end_effector_poses(scene.robot, result.nominal_path)
         path = create_path(positions, scene.frame_id, stamp, orientations)
         with self._lock:
-            self._pending_results = (scene, result, approach, stamp, values)
+            self._pending_results.append((scene, result, approach, stamp, values))
         self.results_timer.reset()
         return path
 
     def results_callback(self) -> None:
-        """Publish θ_s, the nominal trajectory and S_F of the last plan, latched; report it."""
-        self.results_timer.cancel()
+        """Publish the results of the plans answered since the last call, in order."""
+        self.results_timer.cancel()  # before taking them: a plan queued later re-arms it
         with self._lock:
-            pending, self._pending_results = self._pending_results, None
-        if pending is None:
-            return
-        scene, result, approach, stamp, values = pending
+            pending = list(self._pending_results)
+            self._pending_results.clear()
+        for plan_results in pending:
+            self._publish_results(*plan_results)
+
+    def _publish_results(self, scene: Scene, result: PlanResult, approach: Approach | None,
+                         stamp, values: dict) -> None:
+        """Publish θ_s, the nominal trajectory and S_F of a plan, latched; report it."""
+        values.update(theta_s=format_vector(result.theta_s),
+                      waypoints=len(result.nominal_path),
+                      surface_paths=result.surface.paths.shape[0],
+                      min_clearance_m=result.stats.get('min_clearance_m', float('nan')))
+        message = (f'plan found in {values["plan_time_s"]:.3f} s: theta_s = '
+                   f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
+                   f'{values["approach"]}')
         try:
             names = list(scene.robot.joint_names)
             nominal = result.nominal_path
             speed = float(self.get_parameter('max_joint_speed').value)
+            self.info_publisher.publish(create_diagnostic_array(
+                [create_diagnostic_status(self.diagnostics.status_name('plan'), 'OK', message,
+                                          values)], stamp))
             self.surface_publisher.publish(create_failure_surface(result.surface.paths))
             moves = approach.path if approach is not None and approach.ok else \
                 np.zeros((0, len(names)))
@@ -558,14 +604,7 @@ class PlannerNode(Node):
             self.diagnostics.report('plan', 'ERROR', f'could not publish plan '
                                     f'{stamp_key(stamp)}: {error!r}', log=True)
             return
-        values.update(theta_s=format_vector(result.theta_s),
-                      waypoints=len(result.nominal_path),
-                      surface_paths=result.surface.paths.shape[0],
-                      min_clearance_m=result.stats.get('min_clearance_m', float('nan')))
-        self.diagnostics.report(
-            'plan', 'OK', f'plan found in {values["plan_time_s"]:.3f} s: theta_s = '
-            f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
-            f'{values["approach"]}', values, log=True)
+        self.diagnostics.report('plan', 'OK', message, values, log=True)
         with self._lock:
             self._pending_markers = (scene, result, stamp)
         self.markers_timer.reset()
@@ -586,6 +625,15 @@ class PlannerNode(Node):
                 return
             self.diagnostics.report('markers', 'ERROR', f'could not publish markers: {error!r}',
                                     log=True)
+
+
+def _check_plan_workers(value) -> str | None:
+    """Validate `plan_workers`: 0 (plan in the node) up to one worker per core."""
+    cores = os.cpu_count() or 1
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= cores:
+        return (f'must be an integer from 0 (plan in the node\'s process) to {cores} (one '
+                f'worker per core of this machine), got {value!r}')
+    return None
 
 
 def _check_proof_cells(value) -> str | None:

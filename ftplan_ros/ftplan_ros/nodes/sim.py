@@ -13,13 +13,20 @@ given, which must lie within `lock_angle_tolerance` of where it is: a joint cann
 so an event farther off is refused and reported) for good, and the simulated controller
 brakes the other joints too (the paper assumes the failure is detected and the arm
 stops), until a new command arrives; so the arm stays exactly on the commanded path.
-Later commands move only the free joints.
+Later commands move only the free joints. An event stamped ahead of where the arm is on
+its command (a drill's scheduled failure, injector.py) waits for that moment of the
+command (its stamp plus time from start; a command that came late started late, and
+its moments with it) and locks the joint exactly where the command puts the arm then,
+between two ticks too; at the end of the command at the latest.
 
 The sim keeps its own clock: each tick advances it by 1/`rate`, so an overloaded machine
 slows the arm down instead of making it jump past events. It publishes /joint_states
 every tick, checks every motion against the scene and the
 obstacle topic (sampled at most `collision_check_step` apart) and reports collisions,
 the minimum clearance and arrival at the goal on /diagnostics ('ftplan_sim: arm').
+Obstacle updates are applied one by one, in order; lost ones are reported as
+'ftplan_sim: obstacles' (ERROR, obstacle_topic.py): until a full set arrives, the
+collision checks may miss an obstacle.
 `~/reset` (std_srvs/Trigger) puts the arm back at its initial configuration, unlocks
 every joint and clears the counters, for repeated drills.
 
@@ -46,12 +53,12 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
-from visualization_msgs.msg import MarkerArray
 
 from ftplan_msgs_py import (
+    LockedJoint,
     create_joint_state,
     read_joint_trajectory,
-    time_to_seconds,
+    time_to_nanoseconds,
 )
 from ftplan_ros.core import CollisionChecker, InputError, Robot, Scene, Task, task_errors
 from ftplan_ros.core.model.angles import configuration_difference, wrap_configuration
@@ -62,7 +69,7 @@ from ftplan_ros.core.paper.manifolds import project_many, trace_self_motion_mani
 
 from .inputs import angle_problem
 from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem, read_lock_event
-from .obstacles import ObstacleSet
+from .obstacle_topic import ObstacleTopic
 from .params import (
     add_validators,
     array_parameter,
@@ -73,7 +80,7 @@ from .params import (
     non_negative,
     positive,
 )
-from .qos import EVENT_QOS_DEPTH, LATCHED_QOS, SERVICE_QOS
+from .qos import EVENT_QOS_DEPTH, SERVICE_QOS
 from .reporting import Diagnostics, format_vector
 from .scene_source import SceneSource
 from .spinning import run_node
@@ -82,7 +89,6 @@ from .topics import (
     JOINT_COMMAND,
     JOINT_STATES,
     LOCKED_JOINT,
-    OBSTACLES,
     RESET_SERVICE,
     ROBOT_DESCRIPTION,
     SIM_NODE,
@@ -175,13 +181,27 @@ def goal_problem(value, scene: Scene | None) -> str | None:
 class Motion:
     """A timed joint path (k, n) [rad], times (k,) [s] from `start`, sampled linearly.
 
-    Times are on the sim's clock [s].
+    Times are on the sim's clock [s]. `commanded` (k,) [s] are the times the command asked
+    for (`times` may be slower: the speed limit), from its stamp `stamp_ns` [ns, ROS time],
+    which the sim's `start` stands for.
     """
 
-    def __init__(self, positions: np.ndarray, times: np.ndarray, start: float):
+    def __init__(self, positions: np.ndarray, times: np.ndarray, start: float,
+                 commanded: np.ndarray | None = None, stamp_ns: int = 0):
         self.positions = positions
         self.times = times
         self.start = start
+        self.commanded = times if commanded is None else commanded
+        self.stamp_ns = stamp_ns
+
+    def time_of(self, stamp_ns: int) -> float:
+        """Return the sim time [s] at which the arm is where the command puts it at `stamp_ns`.
+
+        `stamp_ns` is ROS time [ns] on the command's timeline (its stamp + time from
+        start); before the start: the start; after the end: the end.
+        """
+        commanded = (stamp_ns - self.stamp_ns) * 1e-9
+        return self.start + float(np.interp(commanded, self.commanded, self.times))
 
     def sample(self, now: float) -> tuple[np.ndarray, bool]:
         """Return the configuration at sim time `now` and whether the motion is over."""
@@ -221,11 +241,14 @@ class SimNode(Node):
             self.scene: Scene | None = None   # bound to task_kind (task_scene)
             self._declare_parameters()
             self.names: list[str] = []
-            self._obstacles = ObstacleSet(None)
+            self.obstacle_topic = ObstacleTopic(self, self.diagnostics)
+            self._obstacles = self.obstacle_topic.obstacles
             self.q = np.zeros(0)
             self.initial = np.zeros(0)
             self.motion: Motion | None = None
             self.locked: dict[int, float] = {}
+            # Scheduled failures: (event, joint, stamp [ns]), each waiting for its moment.
+            self.scheduled: list[tuple[LockedJoint, int, int]] = []
             self.resets = 0
             self.sim_time = 0.0  # [s] advanced by 1/rate each tick
             self._clear_counters()
@@ -238,8 +261,6 @@ class SimNode(Node):
                 JointTrajectory, JOINT_COMMAND, self.joint_command_callback, EVENT_QOS_DEPTH)
             self.locked_joint_subscription = self.create_subscription(
                 JointState, LOCKED_JOINT, self.locked_joint_callback, EVENT_QOS_DEPTH)
-            self.obstacle_subscription = self.create_subscription(
-                MarkerArray, OBSTACLES, self.obstacles_callback, LATCHED_QOS)
             self.reset_service = self.create_service(Trigger, RESET_SERVICE,
                                                      self.reset_callback, qos_profile=SERVICE_QOS)
             self.timer = self.create_timer(1.0 / self.rate, self.timer_callback)
@@ -298,9 +319,9 @@ class SimNode(Node):
         self.q = self.initial.copy()
         self.motion = None
         self.locked = {}
+        self.scheduled = []
         self._clear_counters()
-        for problem in problems:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {problem}')
+        self.obstacle_topic.report_rebase(problems)
         self._check_clearance(self.q[None, :])
         self.publish_joint_state(np.zeros(len(self.names)))
         self.report('at the initial configuration', log=True)
@@ -355,7 +376,7 @@ class SimNode(Node):
             problem = angle_problem(self.robot, positions)
             if problem:
                 raise ValueError(f'JointTrajectory: {problem}')
-            start = self._start_time(msg)
+            start, stamp_ns = self._start_time(msg)
         except ValueError as error:
             self.diagnostics.rejected('input', f'ignored joint command: {error}')
             return
@@ -378,26 +399,42 @@ class SimNode(Node):
         steps = np.maximum(given, needed)
         keep = np.concatenate([[True], steps > 0.0])
         self.motion = Motion(positions[keep], np.concatenate([[0.0], np.cumsum(steps)])[keep],
-                             start)
+                             start, times[keep], stamp_ns)
 
-    def _start_time(self, msg: JointTrajectory) -> float:
-        """Return the sim time a command starts: now, or its stamp when that lies ahead."""
-        stamp = time_to_seconds(msg.header.stamp)
-        if stamp == 0.0:
-            return self.sim_time
-        ahead = stamp - self.get_clock().now().nanoseconds * 1e-9
-        return self.sim_time + max(0.0, ahead)
+    def _start_time(self, msg: JointTrajectory) -> tuple[float, int]:
+        """Return the sim time a command starts, and the ROS time [ns] that start stands for.
+
+        A command starts now, or at its stamp when that lies ahead; an unstamped one is
+        stamped now. A command that arrives after its stamp starts late, from its first
+        point: its whole timeline (a lock scheduled on it too) shifts with it.
+        """
+        now_ns = self.get_clock().now().nanoseconds
+        stamp_ns = time_to_nanoseconds(msg.header.stamp) or now_ns
+        return self.sim_time + max(0.0, (stamp_ns - now_ns) * 1e-9), stamp_ns
 
     def locked_joint_callback(self, msg: JointState) -> None:
-        """Lock a joint where it is (or at the angle given) and brake the arm."""
+        """Lock a joint where it is (or at the angle given), or when its stamp comes; brake.
+
+        An event stamped ahead of where the arm is on its command is a scheduled failure
+        (a drill): it waits in `scheduled` until the command reaches that moment.
+        """
         found = read_lock_event(msg, None if self.scene is None else self.names,
                                 self.source.waiting,
                                 lambda why, _: self.diagnostics.rejected('input', why))
         if found is None:
             return
-        event, joint = found
-        if joint in self.locked:
+        event, joint, stamp_ns = found
+        if joint in self.locked or any(joint == j for _, j, _ in self.scheduled):
             return
+        if stamp_ns and self.motion is not None and self.motion.time_of(stamp_ns) > self.sim_time:
+            self.scheduled.append((event, joint, stamp_ns))
+            self.get_logger().info(f'{event.name} locks in '
+                                   f'{self.motion.time_of(stamp_ns) - self.sim_time:.3f} s')
+            return
+        self._lock(event, joint)
+
+    def _lock(self, event: LockedJoint, joint: int) -> None:
+        """Lock `joint` where it is (or at the event's angle) and brake the arm."""
         problem = lock_angle_problem(event.name, event.angle, float(self.q[joint]),
                                      bool(self.robot.periodic[joint]),
                                      float(self.get_parameter('lock_angle_tolerance').value))
@@ -421,14 +458,6 @@ class SimNode(Node):
         self.get_logger().info(f'{event.name} locked at {value:.6f} rad')
         self.report(f'{event.name} locked at {value:.6f} rad', 'WARN')
 
-    def obstacles_callback(self, msg: MarkerArray) -> None:
-        """Add the obstacle topic to the collision checks."""
-        try:
-            self._obstacles.update(msg)
-        except ValueError as error:
-            self.diagnostics.rejected('input', f'ignored obstacle markers: {error}; keeping '
-                                      f'the {len(self._obstacles)} previous')
-
     def reset_callback(self, request: Trigger.Request, response: Trigger.Response,
                        ) -> Trigger.Response:
         """Back to the initial configuration, every joint free, counters cleared."""
@@ -441,6 +470,7 @@ class SimNode(Node):
         self.q = self.initial.copy()
         self.motion = None
         self.locked = {}
+        self.scheduled = []
         self.resets += 1
         self._clear_counters()
         self._check_clearance(self.q[None, :])
@@ -460,15 +490,18 @@ class SimNode(Node):
         self.sim_time += dt
         previous = self.q
         try:
+            until, due = self._due_locks(self.sim_time - dt, self.sim_time)
             swept = None
             if self.motion is not None:
-                swept, finished = self.motion.swept(self.sim_time - dt, self.sim_time)
+                swept, finished = self.motion.swept(self.sim_time - dt, until)
                 swept[0] = previous
                 for joint, value in self.locked.items():
                     swept[:, joint] = value
                 self.q = swept[-1].copy()
                 if finished:
                     self.motion = None
+            for event, joint in due:
+                self._lock(event, joint)
             # From the path, not its end: a command may go out and back within a tick.
             moved = swept is not None and bool(np.any(swept != previous))
             if moved:
@@ -485,6 +518,22 @@ class SimNode(Node):
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             self.get_logger().error(traceback.format_exc())
             self.diagnostics.report('arm', 'ERROR', f'internal sim error: {error!r}')
+
+    def _due_locks(self, before: float, now: float) -> tuple[float, list[tuple[LockedJoint, int]]]:
+        """Take the scheduled locks due by sim time `now` [s]; return when the first is due.
+
+        The arm moves until that moment (within the tick from `before`) and locks there,
+        exactly where its command puts it then. Without a command every lock is due.
+        """
+        moments = [self.motion.time_of(stamp_ns) if self.motion is not None else before
+                   for _, _, stamp_ns in self.scheduled]
+        due = [lock for lock, moment in zip(self.scheduled, moments, strict=True)
+               if moment <= now]
+        if not due:
+            return now, []
+        self.scheduled = [lock for lock in self.scheduled if lock not in due]
+        first = max(before, min(moment for moment in moments if moment <= now))
+        return first, [(event, joint) for event, joint, _ in due]
 
     def _check_clearance(self, samples: np.ndarray) -> None:
         """Check samples (k, n) [rad] of the motion; a collision is measured exactly."""

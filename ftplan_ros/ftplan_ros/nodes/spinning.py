@@ -1,4 +1,6 @@
-"""Executor helpers: a MultiThreadedExecutor without rclpy 7's busy loops, and a clean stop.
+"""Executor helpers: an executor without rclpy 7's busy loops, a clean stop, a bounded group.
+
+`BoundedCallbackGroup` runs up to N callbacks of a group at once (the planner's plans).
 
 Two busy loops of rclpy 7 (Jazzy) with Fast DDS make a MultiThreadedExecutor spin at
 full speed while holding the GIL, so that a node with a 100 Hz timer next to a few
@@ -26,6 +28,7 @@ import traceback
 from collections.abc import Callable, Sequence
 
 import rclpy
+from rclpy.callback_groups import CallbackGroup
 from rclpy.context import Context
 from rclpy.event_handler import EventHandler
 from rclpy.executors import ExternalShutdownException
@@ -47,12 +50,13 @@ RclError = _rclpy.RCLError
 class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
     """rclpy's MultiThreadedExecutor for plain (non-coroutine) callbacks, minus its busy loop.
 
-    It runs at least `MIN_THREADS` threads, so that a slow plan never leaves the other
-    nodes of a process without one.
+    It runs one thread per core, for the plans that wait on plan workers side by side (at
+    most one per core), and `MIN_THREADS` more, so that slow plans never leave the other
+    callbacks of a process without one.
     """
 
     def __init__(self, num_threads: int | None = None, *, context=None):
-        super().__init__(num_threads or max(MIN_THREADS, os.cpu_count() or 1), context=context)
+        super().__init__(num_threads or MIN_THREADS + (os.cpu_count() or 1), context=context)
 
     def can_execute(self, entity) -> bool:
         """Leave QoS event handlers out of the wait set (the first busy loop above)."""
@@ -98,6 +102,40 @@ class MultiThreadedExecutor(_RclpyMultiThreadedExecutor):
         with self._tasks_lock:
             self._tasks = [entry for entry in self._tasks if entry[0] is not task]
         return task
+
+
+class BoundedCallbackGroup(CallbackGroup):
+    """Run at most `limit` callbacks of the group at once (1: mutually exclusive).
+
+    The callbacks past the limit wait where they are (a service's requests in its queue)
+    rather than in executor threads.
+    """
+
+    def __init__(self, limit: int):
+        super().__init__()
+        if limit < 1:
+            raise ValueError(f'a callback group runs at least 1 callback at once, got {limit}')
+        self.limit = limit
+        self._running = 0
+        self._lock = threading.Lock()
+
+    def can_execute(self, entity) -> bool:
+        """Whether a callback may start now."""
+        with self._lock:
+            return self._running < self.limit
+
+    def beginning_execution(self, entity) -> bool:
+        """Count a callback in, if there is room."""
+        with self._lock:
+            if self._running >= self.limit:
+                return False
+            self._running += 1
+            return True
+
+    def ending_execution(self, entity) -> None:
+        """Count a callback out."""
+        with self._lock:
+            self._running -= 1
 
 
 class BackgroundSpin:

@@ -33,6 +33,8 @@ def pair_clearances(model: ChainModel, thetas: np.ndarray,
     """
     everything = replace(model, disabled_pairs=frozenset())
     checker = CollisionChecker(SpatialArm(everything, 'position'), [])
+    if not checker.pairs:  # fewer than two links with geometry
+        return (), np.zeros((len(thetas), 0))
     clearance = checker.clearance(thetas, needed=0.0)
     links = checker.channel_links
     distances = np.stack([clearance[:, (links[:, 0] == a) & (links[:, 1] == b)].min(axis=1)

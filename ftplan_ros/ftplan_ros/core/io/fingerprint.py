@@ -6,13 +6,10 @@ which comes from a file, is named by a digest of its model (`scene_fingerprint`)
 
 from __future__ import annotations
 
-import hashlib
 import math
 from typing import Any
 
-import numpy as np
-
-from ..model.robot import PlanarChain
+from ..model.robot import PlanarChain, geometry_sha256
 from ..model.scene import Obstacle, Scene
 
 
@@ -51,18 +48,10 @@ def scene_fingerprint(scene: Scene) -> dict:
     if isinstance(scene.robot, PlanarChain):
         return scene_to_dict(scene)
     robot = scene.robot
-    geometry = hashlib.sha256(np.ascontiguousarray(robot.kernel_parameters).tobytes())
-    for link in robot.collision_shapes:
-        shape = link.shape
-        geometry.update(repr((link.link, shape.kind, shape.radius, shape.size,
-                              shape.length)).encode())
-        for array in (link.placement, shape.vertices, shape.faces):
-            geometry.update(np.ascontiguousarray(array).tobytes())
-    geometry.update(repr(robot.self_collision_pairs).encode())
     limits = [[float(v) if math.isfinite(v) else None for v in row] for row in robot.limits]
     out: dict[str, Any] = {
         'robot': {'task_kind': robot.task_kind, 'joint_names': list(robot.joint_names),
-                  'limits': limits, 'geometry_sha256': geometry.hexdigest()},
+                  'limits': limits, 'geometry_sha256': geometry_sha256(robot)},
         'obstacles': [_obstacle_to_dict(ob) for ob in scene.obstacles],
         'frame_id': scene.frame_id,
         'tolerate': None if scene.tolerate is None else list(scene.tolerate)}

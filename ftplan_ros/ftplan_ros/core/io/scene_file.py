@@ -30,8 +30,10 @@ from ..model.scene import (
     Task,
 )
 from ..model.spatial import SpatialArm
+from ..model.srdf import chain_exceptions, read_srdf
 from ..model.task_space import unit_vector
 from ..model.urdf import chain_from_urdf
+from ..model.urdf_structure import read_urdf
 from ..validation import check_keys, mapping, nonnegative, number, sequence, vector
 from .files import load_yaml, read_text
 
@@ -154,15 +156,19 @@ def _planar_robot(data: Mapping) -> PlanarChain:
 
 def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
     check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
-                optional=('base_link', 'tip_offset', 'disabled_collisions'))
-    if not isinstance(data['file'], str) or not data['file']:
-        raise InputError('robot.file', 'must be the path of a URDF file')
+                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf'))
+    texts = {}
+    for key, kind in (('file', 'URDF'), ('srdf', 'SRDF')):
+        if key in data:
+            if not isinstance(data[key], str) or not data[key]:
+                raise InputError(f'robot.{key}', f'must be the path of an {kind} file')
+            texts[key] = read_text(directory / data[key], f'robot.{key}')
     path = directory / data['file']
-    xml = read_text(path, 'robot.file')
-    return robot_from_urdf(xml, data['tip_link'], data.get('base_link'),
+    return robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
                            data.get('tip_offset', [0.0, 0.0, 0.0]),
                            data.get('disabled_collisions'),
-                           mesh_dirs=[str(path.parent), str(path.parent.parent)]).model
+                           mesh_dirs=[str(path.parent), str(path.parent.parent)],
+                           srdf=texts.get('srdf')).model
 
 
 def _dh_chain(data: Mapping) -> ChainModel:
@@ -187,17 +193,27 @@ def _dh_chain(data: Mapping) -> ChainModel:
 def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
                     tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
                     disabled_collisions: Any = None, mesh_dirs: Sequence[str] = (),
-                    task_kind: str = 'pose') -> SpatialArm:
+                    task_kind: str = 'pose', srdf: str | None = None) -> SpatialArm:
     """Build the arm of a URDF given as text (e.g. /robot_description) for a kind of task.
 
     The arguments are those of a scene's `robot: {type: urdf, ...}` (InputError names
-    them the same way).
+    them the same way); `srdf` is the text of an SRDF (e.g. /robot_description_semantic)
+    whose exceptions replace the default ones (srdf.py). The exceptions come from one
+    place: an SRDF beside a `disabled_collisions` list is refused.
     """
     for key, value in (('tip_link', tip_link), ('base_link', base_link)):
         if value is not None and (not isinstance(value, str) or not value):
             raise InputError(f'robot.{key}', 'must be a link name')
+    if srdf is not None and disabled_collisions is not None:
+        raise InputError('robot.srdf', 'and robot.disabled_collisions both give the '
+                         'self-collision exceptions: keep one of them')
     offset = vector(list(tip_offset), 'robot.tip_offset', length=3)
-    model = chain_from_urdf(xml, tip_link, base_link, offset, mesh_dirs=mesh_dirs)
+    urdf = read_urdf(xml)
+    exceptions = None if srdf is None else read_srdf(srdf, urdf.links)
+    model = chain_from_urdf(urdf, tip_link, base_link, offset, mesh_dirs=mesh_dirs)
+    if exceptions is not None:
+        return SpatialArm(replace(model, disabled_pairs=chain_exceptions(model, exceptions)),
+                          task_kind)
     return SpatialArm(with_disabled_collisions(model, disabled_collisions), task_kind)
 
 

@@ -9,6 +9,8 @@ uses: none writes x - f(θ) itself.
 
 from __future__ import annotations
 
+import hashlib
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol
@@ -106,11 +108,16 @@ class Robot(Protocol):
 
 @dataclass(frozen=True, eq=False)
 class LinkShape:
-    """A collision shape of link `link`, posed by `placement` (4, 4) in the link's frame."""
+    """A collision shape of link `link`, posed by `placement` (4, 4) in the link's frame.
+
+    `urdf_link` names the URDF link the shape comes from (a link folded into `link` by a
+    fixed or locked joint, or `link` itself); '' for chains not read from a URDF.
+    """
 
     link: int
     shape: Shape
     placement: np.ndarray
+    urdf_link: str = ''
 
 
 @dataclass(frozen=True)
@@ -280,3 +287,33 @@ def task_errors(robot: Robot, x: np.ndarray, thetas: np.ndarray) -> np.ndarray:
     out = kinematics.task_errors(robot.kernel_kind, robot.kernel_parameters,
                               np.asarray(x, dtype=float), flat)
     return out.reshape(thetas.shape[:-1] + (2,))
+
+
+def geometry_sha256(robot: Robot) -> str:
+    """Return a SHA-256 (hex) of what the kernels and collision checks use of the robot.
+
+    That is its kinematic parameters, collision shapes and self-collision pairs.
+    """
+    geometry = hashlib.sha256(np.ascontiguousarray(robot.kernel_parameters).tobytes())
+    for link in robot.collision_shapes:
+        shape = link.shape
+        geometry.update(repr((link.link, shape.kind, shape.radius, shape.size,
+                              shape.length)).encode())
+        for array in (link.placement, shape.vertices, shape.faces):
+            geometry.update(np.ascontiguousarray(array).tobytes())
+    geometry.update(repr(robot.self_collision_pairs).encode())
+    return geometry.hexdigest()
+
+
+def robot_digest(robot: Robot) -> str:
+    """Name the robot's model by a digest: 12 hex digits.
+
+    It covers what a plan depends on: joint names, limits [rad] (periodic joints too), the
+    chain the joints sit in, and `geometry_sha256`; not the task kind, which the same
+    model takes on per request. A plan made for one robot is stale for a robot of
+    another digest, even one with the same joint names.
+    """
+    limits = [[float(v) if math.isfinite(v) else None for v in row] for row in robot.limits]
+    text = repr((tuple(robot.joint_names), limits, robot.periodic.tolist(),
+                 robot.joint_chain_index.tolist(), geometry_sha256(robot)))
+    return hashlib.sha256(text.encode()).hexdigest()[:12]

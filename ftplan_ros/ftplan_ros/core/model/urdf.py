@@ -1,16 +1,17 @@
 """Spatial chains from URDF, parsed by Pinocchio.
 
-The chain runs from `base_link` (fixed to the URDF's root) to `tip_link`: its joints must
-be revolute or continuous. Joints off that path (fingers, a second arm) are locked at
-zero with Pinocchio's `buildReducedModel`, which folds their links' geometry into the
-chain, and fixed joints are folded in the same way. Collision geometry is the links'
-`<collision>` elements: boxes, cylinders, spheres, capsules and meshes (loaded by
-Pinocchio; mesh paths are looked up next to the URDF and under `mesh_dirs`).
+The URDF is checked first (urdf_structure.py): Pinocchio reads only a tree it can
+build, and reads it as it was checked. The chain runs from `base_link` (fixed to the
+URDF's root) to `tip_link`: its joints must be revolute or continuous. Joints off that
+path (fingers, a second arm) are locked at zero with Pinocchio's `buildReducedModel`,
+which folds their links' geometry into the chain, and fixed joints are folded in the
+same way. Collision geometry is the links' `<collision>` elements: boxes, cylinders,
+spheres, capsules and meshes (loaded by Pinocchio; mesh paths are looked up next to the
+URDF and under `mesh_dirs`).
 """
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ElementTree
 from collections.abc import Sequence
 
 import numpy as np
@@ -20,6 +21,7 @@ from ..errors import InputError
 from .chain import ChainModel
 from .geometry import Shape
 from .robot import LinkShape
+from .urdf_structure import UrdfDescription, read_urdf
 
 _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
@@ -27,24 +29,24 @@ _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
 _PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
 
 
-def chain_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
+def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str | None = None,
                     tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
                     mesh_dirs: Sequence[str] = (), where: str = 'robot') -> ChainModel:
-    """Build the chain base_link → tip_link of a URDF (a string); tool at `tip_offset` [m].
+    """Build the chain base_link → tip_link of a URDF; tool at `tip_offset` [m].
 
-    `tip_offset` is in the tip link's frame. Bad input raises InputError naming
-    `<where>.file`, `<where>.base_link` or `<where>.tip_link`.
+    `urdf` is the URDF's text, or what `read_urdf` made of it. `tip_offset` is in the tip
+    link's frame. Bad input raises InputError naming `<where>.file`, `<where>.base_link`
+    or `<where>.tip_link`.
     """
-    try:
-        ElementTree.fromstring(xml)
-    except ElementTree.ParseError as error:
-        raise InputError(f'{where}.file', f'is not valid XML ({error})') from None
+    if not isinstance(urdf, UrdfDescription):
+        urdf = read_urdf(urdf, where)
+    xml = urdf.xml
     try:
         model = pin.buildModelFromXML(xml)
     except (ValueError, RuntimeError) as error:
         raise InputError(f'{where}.file', f'is not a URDF Pinocchio can read: '
                          f'{_one_line(error)}') from None
-    base_link = base_link or _root_link(model)
+    base_link = base_link or urdf.root
     base = _body_frame(model, base_link, f'{where}.base_link')
     tip = _body_frame(model, tip_link, f'{where}.tip_link')
     if model.frames[base].parentJoint != 0:
@@ -103,7 +105,8 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
         placement = item.placement.homogeneous
         if item.parentJoint == 0:
             placement = to_base @ placement
-        shapes.append(LinkShape(int(item.parentJoint), _shape(item, where), placement))
+        shapes.append(LinkShape(int(item.parentJoint), _shape(item, where), placement,
+                                model.frames[item.parentFrame].name))
     link_names = [base_link] + [_child_link(model, j) for j in range(1, n + 1)]
     return ChainModel(model.name, tuple(model.names[1:n + 1]), tuple(link_names), placements,
                       _joint_axes(model, where), tool, tuple(limits), tuple(shapes),
@@ -119,7 +122,8 @@ def _joint_axes(model: pin.Model, where: str) -> np.ndarray:
     pin.computeJointJacobians(model, data, pin.neutral(model))
     axes = []
     for j in range(1, model.njoints):
-        local = pin.getJointJacobian(model, data, j, pin.ReferenceFrame.LOCAL)
+        # (6, nv); a model of one joint comes back as (6,).
+        local = np.reshape(pin.getJointJacobian(model, data, j, pin.ReferenceFrame.LOCAL), (6, -1))
         axis = local[3:, model.joints[j].idx_v]
         if not abs(np.linalg.norm(axis) - 1.0) <= 1e-9:
             raise InputError(f'{where}.file', f'joint {model.names[j]!r} has the axis '
@@ -148,10 +152,6 @@ def _shape(item: pin.GeometryObject, where: str) -> Shape:
         return Shape('mesh', vertices=vertices, faces=faces)
     raise InputError(f'{where}.file', f'collision geometry {item.name!r} is a {kind}: '
                      'use box, cylinder, sphere, capsule or mesh')
-
-
-def _root_link(model: pin.Model) -> str:
-    return next(f.name for f in model.frames if f.type == pin.FrameType.BODY)
 
 
 def _body_frame(model: pin.Model, name: str, where: str) -> int:

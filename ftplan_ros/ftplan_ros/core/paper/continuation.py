@@ -2,7 +2,7 @@
 
 Tracing is most of a cold plan: thousands of steps, each a few Newton iterations on an
 n x n system, where numpy's per-call overhead dominates in plain Python. The kernel gets
-the robot's task map from `kernels.task_residual(Robot.kernel_kind,
+the robot's task map from `kinematics.task_residual(Robot.kernel_kind,
 Robot.kernel_parameters, x, θ)`, so it serves any chain and task with one degree of
 redundancy (n = m + 1). The machine code is cached next to this file (numba's cache), so
 only the first run on a machine compiles. Angles [rad], positions [m].

@@ -2,10 +2,15 @@
 
 numba loads (or, on a new machine, compiles) each kernel at its first call in a
 process: together about a second from its cache, a minute to compile. The Makefile
-calls `load_kernels` at set-up, so the cache is there before the first plan.
+calls `load_kernels` at set-up, so the cache is there before the first plan. Running
+them takes time too, growing with the robot's collision geometry (9 s for a URDF of
+a thousand shapes): a robot warmed once is not warmed again.
 """
 
 from __future__ import annotations
+
+import threading
+import weakref
 
 import numpy as np
 
@@ -21,12 +26,26 @@ from ..paper.recovery import recover
 from .curves import FrozenJoints
 from .surface_search import straight_fans
 
+# The robots warmed so far (an equal robot: the same model bound to the same task kind).
+_warmed: weakref.WeakSet = weakref.WeakSet()
+_warmed_lock = threading.Lock()
+
 
 def load_kernels(robot: Robot) -> None:
     """Run every compiled kernel the robot's plans use once: tracing, task maps, distances.
 
-    Recovery and, for a planar 3R arm, the recovery sheets' kernels too.
+    Recovery and, for a planar 3R arm, the recovery sheets' kernels too. A robot equal to
+    one warmed before returns at once.
     """
+    with _warmed_lock:
+        if robot in _warmed:
+            return
+    _run_kernels(robot)
+    with _warmed_lock:
+        _warmed.add(robot)
+
+
+def _run_kernels(robot: Robot) -> None:
     theta = np.clip(np.full(robot.n_joints, 0.5), robot.limits[:, 0], robot.limits[:, 1])
     x = robot.forward_kinematics(theta)
     task_residuals(robot, x, theta)
