@@ -13,7 +13,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ftplan_ros.core.collision.checker import CollisionChecker
-from ftplan_ros.core.collision.checker import checker as checker_module
+from ftplan_ros.core.collision import checker as checker_module
 from ftplan_ros.core.collision.distance_kernels import (
     BOX,
     CAPSULE,

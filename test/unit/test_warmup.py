@@ -68,7 +68,7 @@ def test_plans_of_every_kind_compile_nothing_after_the_warm_up():
 def test_a_robot_is_warmed_once_for_each_task_kind(monkeypatch):
     """A robot of a thousand shapes took 9 s each time: the nodes warm it off their executor,
     then their own call must return at once."""
-    from ftplan_ros.core import warmup
+    from ftplan_ros.core.planning import warmup
     from ftplan_ros.core.io.scene_file import parse_scene
 
     def panda():

@@ -36,7 +36,7 @@ from ..core.paper.manifolds import project_many
 from ..core.planning.drill import run_drill
 
 ROBOTS = {'panda': ('panda.yaml', 'panda_joint4'), 'iiwa14': ('iiwa14.yaml', 'iiwa_joint_4')}
-CONFIG = Path(__file__).resolve().parents[2] / 'config' / 'robots'
+CONFIG = Path(__file__).resolve().parents[3] / 'config' / 'robots'
 OBSTACLES = 10
 LOCK_MOMENTS = 8
 RRT_BUDGET = 0.2  # [s] per failure-plane search
