@@ -8,9 +8,16 @@ obstacles in closed form, shapes' surfaces sampled densely.
 
 import numpy as np
 import pytest
-from ftplan_testing import CUBE, TETRAHEDRON, bot, robot_config
-from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
+from ftplan_testing import bot, robot_config
+from shape_references import (
+    SPACING,
+    closest,
+    distance_to_obstacle,
+    posed,
+    random_link_shape,
+    random_pose,
+    surface_points,
+)
 
 from ftplan_ros.core.collision import checker as checker_module
 from ftplan_ros.core.collision.checker import CollisionChecker
@@ -33,11 +40,7 @@ from ftplan_ros.core.model.chain import ChainModel
 from ftplan_ros.core.model.dh import DHRow, chain_from_dh
 from ftplan_ros.core.model.geometry import (
     Shape,
-    rotation_from_rpy,
-    separation,
     signed_distance,
-    support,
-    transform,
 )
 from ftplan_ros.core.model.robot import LinkShape, PlanarChain
 from ftplan_ros.core.model.scene import Obstacle, Scene, Task
@@ -46,103 +49,6 @@ from ftplan_ros.core.planning.curves import FrozenJoints
 from ftplan_ros.core.planning.planner import check_plannable
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))
-SPACING = 0.002  # [m] between surface samples: sampled distances exceed the truth by less
-
-
-# Independent references -----------------------------------------------------------------
-
-def obstacle_frame(obstacle):
-    """Rotation (3, 3) of an obstacle: fixed-axis roll, pitch, yaw (scipy's 'xyz')."""
-    return Rotation.from_euler('xyz', obstacle.rpy).as_matrix()
-
-
-def distance_to_obstacle(obstacle, points):
-    """Signed distance (P,) [m] from world points (P, 3) to an obstacle, by closest points."""
-    local = (np.asarray(points, dtype=float) - obstacle.center) @ obstacle_frame(obstacle)
-    if obstacle.shape == 'sphere':
-        return np.linalg.norm(local, axis=1) - obstacle.radius
-    if obstacle.shape == 'box':
-        half = 0.5 * np.asarray(obstacle.size)
-        closest = np.clip(local, -half, half)
-        outside = np.linalg.norm(local - closest, axis=1)
-        depth = np.min(half - np.abs(local), axis=1)
-        return np.where(depth > 0.0, -depth, outside)
-    radial = np.hypot(local[:, 0], local[:, 1])
-    half = 0.5 * obstacle.length
-    out_r = np.maximum(radial - obstacle.radius, 0.0)
-    out_z = np.maximum(np.abs(local[:, 2]) - half, 0.0)
-    depth = np.minimum(obstacle.radius - radial, half - np.abs(local[:, 2]))
-    return np.where(depth > 0.0, -depth, np.hypot(out_r, out_z))
-
-
-def grid(low, high, spacing):
-    return np.linspace(low, high, max(2, int(np.ceil((high - low) / spacing)) + 1))
-
-
-def fibonacci_sphere(radius, spacing):
-    count = max(8, int(np.ceil(4.0 * np.pi * radius ** 2 / spacing ** 2)))
-    k = np.arange(count) + 0.5
-    z = 1.0 - 2.0 * k / count
-    angle = np.pi * (1.0 + 5 ** 0.5) * k
-    r = np.sqrt(1.0 - z * z)
-    return radius * np.stack([r * np.cos(angle), r * np.sin(angle), z], axis=1)
-
-
-def disk(radius, z, spacing):
-    rings = [np.array([[0.0, 0.0, z]])]
-    for rho in grid(0.0, radius, spacing)[1:]:
-        phi = np.linspace(0.0, 2 * np.pi, max(8, int(np.ceil(2 * np.pi * rho / spacing))),
-                          endpoint=False)
-        rings.append(np.stack([rho * np.cos(phi), rho * np.sin(phi), np.full_like(phi, z)], 1))
-    return np.vstack(rings)
-
-
-def surface_points(shape, spacing=SPACING):
-    """Points (P, 3) on a shape's surface, in its frame, at most about `spacing` apart."""
-    if shape.kind == 'sphere':
-        return fibonacci_sphere(shape.radius, spacing)
-    if shape.kind == 'box':
-        half = 0.5 * np.asarray(shape.size)
-        faces = []
-        for axis in range(3):
-            u, v = (a for a in range(3) if a != axis)
-            uu, vv = np.meshgrid(grid(-half[u], half[u], spacing), grid(-half[v], half[v], spacing))
-            for side in (-1.0, 1.0):
-                face = np.zeros((uu.size, 3))
-                face[:, u], face[:, v], face[:, axis] = uu.ravel(), vv.ravel(), side * half[axis]
-                faces.append(face)
-        return np.vstack(faces)
-    if shape.kind in ('cylinder', 'capsule'):
-        half = 0.5 * shape.length
-        phi = np.linspace(0.0, 2 * np.pi, max(8, int(np.ceil(2 * np.pi * shape.radius / spacing))),
-                          endpoint=False)
-        pp, zz = np.meshgrid(phi, grid(-half, half, spacing))
-        side = np.stack([shape.radius * np.cos(pp).ravel(), shape.radius * np.sin(pp).ravel(),
-                         zz.ravel()], axis=1)
-        if shape.kind == 'cylinder':
-            return np.vstack([side, disk(shape.radius, -half, spacing),
-                              disk(shape.radius, half, spacing)])
-        ball = fibonacci_sphere(shape.radius, spacing)
-        return np.vstack([side, ball[ball[:, 2] >= 0] + [0, 0, half],
-                          ball[ball[:, 2] <= 0] - [0, 0, half]])
-    pieces = []
-    for face in shape.faces:
-        a, b, c = shape.vertices[face]
-        steps = max(1, int(np.ceil(max(np.linalg.norm(b - a), np.linalg.norm(c - a)) / spacing)))
-        s, t = np.meshgrid(np.arange(steps + 1), np.arange(steps + 1))
-        inside = s + t <= steps
-        s, t = s[inside] / steps, t[inside] / steps
-        pieces.append(a + np.outer(s, b - a) + np.outer(t, c - a))
-    return np.vstack(pieces)
-
-
-def posed(points, pose):
-    return points @ pose[:3, :3].T + pose[:3, 3]
-
-
-def closest(first, second):
-    """Smallest distance [m] between two point sets (P, 3) and (Q, 3)."""
-    return float(cKDTree(second).query(first)[0].min())
 
 
 def one_shape_arm(shape, placement=None):
@@ -151,22 +57,6 @@ def one_shape_arm(shape, placement=None):
                        np.eye(4), (None,), (LinkShape(1, shape, np.eye(4) if placement is None
                                                       else placement),))
     return SpatialArm(model, 'position')
-
-
-def random_pose(rng, spread=0.1):
-    return transform(Rotation.random(random_state=rng.integers(1 << 31)).as_matrix(),
-                     rng.uniform(-spread, spread, 3))
-
-
-def random_link_shape(kind, rng):
-    if kind == 'box':
-        return Shape('box', size=tuple(rng.uniform(0.05, 0.3, 3)))
-    if kind in ('cylinder', 'capsule'):
-        return Shape(kind, radius=rng.uniform(0.02, 0.1), length=rng.uniform(0.05, 0.4))
-    if kind == 'sphere':
-        return Shape('sphere', radius=rng.uniform(0.02, 0.15))
-    vertices, faces = {'cube': CUBE, 'tetrahedron': TETRAHEDRON}[kind]
-    return Shape('mesh', vertices=vertices * rng.uniform(1.0, 2.0), faces=faces)
 
 
 def random_obstacle(kind, rng, spread=0.5):
@@ -206,14 +96,6 @@ def test_rotated_box_and_cylinder():
     clearance = CollisionChecker(ARM, [cylinder]).clearance(np.zeros((1, 3)))[0]
     assert clearance[1] == pytest.approx(0.5, abs=1e-8)
     assert clearance[0] == pytest.approx(np.hypot(0.3, 0.5), abs=1e-8)
-
-
-def test_rotation_from_rpy_is_z_y_x():
-    assert np.allclose(rotation_from_rpy((0, 0, np.pi / 2)) @ [1, 0, 0], [0, 1, 0])
-    assert np.allclose(rotation_from_rpy((0, np.pi / 2, 0)) @ [0, 0, 1], [1, 0, 0])
-    assert np.allclose(rotation_from_rpy((np.pi / 2, 0, 0)) @ [0, 1, 0], [0, 0, 1])
-    rpy = (0.3, -1.1, 2.5)
-    assert np.allclose(rotation_from_rpy(rpy), Rotation.from_euler('xyz', rpy).as_matrix())
 
 
 def test_penetration_is_negative_and_link_radius_counts():
@@ -638,58 +520,6 @@ def test_channels_are_named_per_shape():
     assert {tuple(pair) for pair in links[len(moving):].tolist()} == set(robot.self_collision_pairs)
 
 
-# geometry.py and distance_kernels.py -----------------------------------------------------
-
-SHAPES = ['sphere', 'box', 'cylinder', 'capsule', 'cube', 'tetrahedron']
-
-
-@pytest.mark.parametrize('kind', SHAPES)
-def test_support_is_the_farthest_point_along_a_direction(kind, rng):
-    for _ in range(10):
-        shape, pose = random_link_shape(kind, rng), random_pose(rng, spread=0.5)
-        points = posed(surface_points(shape, 0.004), pose)
-        for direction in Rotation.random(5, random_state=rng.integers(1 << 31)).apply([1, 0, 0]):
-            value = support(shape, pose[:3, :3], pose[:3, 3], direction)
-            farthest = float(np.max(points @ direction))
-            assert farthest - 1e-12 <= value <= farthest + 0.004
-        centre, radius = shape.bounding_sphere()
-        assert np.all(np.linalg.norm(posed(surface_points(shape, 0.01), np.eye(4)) - centre,
-                                     axis=1) <= radius + 1e-12)
-
-
-@pytest.mark.parametrize('first', SHAPES)
-@pytest.mark.parametrize('second', SHAPES)
-def test_separation_is_a_lower_bound_for_any_direction(first, second, rng):
-    for _ in range(5):
-        a, b = random_link_shape(first, rng), random_link_shape(second, rng)
-        pose_a, pose_b = random_pose(rng, 0.3), random_pose(rng, 0.3)
-        points_a = posed(surface_points(a, 0.01), pose_a)
-        points_b = posed(surface_points(b, 0.01), pose_b)
-        nearest = closest(points_a, points_b)
-        axis = pose_b[:3, 3] - pose_a[:3, 3]
-        for direction in [axis / np.linalg.norm(axis),
-                          *Rotation.random(4, random_state=rng.integers(1 << 31)).apply([1, 0, 0])]:
-            bound = separation(a, (pose_a[:3, :3], pose_a[:3, 3]), b,
-                               (pose_b[:3, :3], pose_b[:3, 3]), direction)
-            assert bound <= nearest + 1e-12
-
-
-@pytest.mark.parametrize('kind', ['sphere', 'box', 'cylinder', 'capsule'])
-def test_signed_distances_of_the_primitives(kind, rng):
-    shape = random_link_shape(kind, rng)
-    points = rng.uniform(-0.4, 0.4, (500, 3))
-    values = signed_distance(shape, points)
-    surface = surface_points(shape, 0.003)
-    nearest = cKDTree(surface).query(points)[0]
-    assert np.allclose(np.abs(values), nearest, atol=0.003)
-    if kind != 'capsule':
-        as_obstacle = Obstacle(kind, (0.0, 0.0, 0.0), radius=shape.radius, size=shape.size,
-                               length=shape.length)
-        assert np.allclose(values, distance_to_obstacle(as_obstacle, points), atol=1e-12)
-    with pytest.raises(ValueError, match='meshes'):
-        signed_distance(random_link_shape('cube', rng), points)
-
-
 def test_segment_distance_against_brute_force(rng):
     t = np.linspace(0.0, 1.0, 601)
     cases = [rng.uniform(-1.0, 1.0, (4, 3)) for _ in range(40)]
@@ -726,3 +556,4 @@ def test_segment_signed_distance_against_brute_force(kind, rng):
         early = segment_signed_distance(code, parameters, frame, start, end, enough)
         assert early <= brute + 1e-9
         assert early >= enough or abs(early - exact) < 1e-12
+

@@ -5,8 +5,7 @@ import pytest
 from ftplan_testing import jacobian
 
 from ftplan_ros.core.collision.checker import CollisionChecker
-from ftplan_ros.core.model.angles import configuration_difference, wrap_steps
-from ftplan_ros.core.model.kinematics import solve_in_place
+from ftplan_ros.core.model.angles import configuration_difference
 from ftplan_ros.core.model.robot import PlanarChain
 from ftplan_ros.core.model.scene import Obstacle
 from ftplan_ros.core.paper.manifolds import (
@@ -150,27 +149,3 @@ def test_cache_returns_the_same_branches(rng):
     cache.trace(ARM, np.array([1.0, 0.0]), rng)
     assert cache.trace(ARM, np.array([2.0, 0.0]), rng) is not first  # evicted
 
-
-def test_the_traces_small_solve_agrees_with_lapack_and_refuses_a_singular_system():
-    rng = np.random.default_rng(3)
-    for n in (2, 3, 7):
-        for _ in range(50):
-            matrix, rhs = rng.normal(size=(n, n)), rng.normal(size=(n, 2))
-            solution = rhs.copy()
-            assert solve_in_place(matrix.copy(), solution)
-            assert np.allclose(solution, np.linalg.solve(matrix, rhs), rtol=1e-9, atol=1e-12)
-        singular = rng.normal(size=(n, n))
-        singular[:, n // 2] = 0.0  # a zero column: some pivot is exactly 0
-        assert not solve_in_place(singular, rng.normal(size=(n, 2)))
-
-
-def test_compiled_steps_wrap_as_the_configuration_difference():
-    """wrap_steps (the trace's and the sheets' compiled wrap) equals the numpy one, bit for
-    bit, on one step and on rows of them, joints with and without limits mixed."""
-    rng = np.random.default_rng(4)
-    periodic = np.array([True, False, True])
-    a, b = rng.uniform(-20.0, 20.0, (2, 50, 3))
-    a[0, 0] = b[0, 0] + np.pi  # a half turn exactly
-    assert np.array_equal(wrap_steps(a - b, periodic), configuration_difference(a, b, periodic))
-    assert np.array_equal(wrap_steps(a[3] - b[3], periodic),
-                          configuration_difference(a[3], b[3], periodic))

@@ -10,7 +10,6 @@ from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.fingerprint import scene_to_dict
 from ftplan_ros.core.io.scene_file import load_scene, parse_scene
 from ftplan_ros.core.model.robot import PlanarChain
-from ftplan_ros.core.model.scene import Task
 from ftplan_ros.core.model.spatial import SpatialArm
 from ftplan_ros.core.model.task_space import TASK_DIM
 
@@ -139,13 +138,6 @@ def test_missing_file(tmp_path):
         load_scene(tmp_path / 'nope.yaml')
 
 
-def test_with_obstacles_keeps_the_rest():
-    scene = parse_scene(GOOD)
-    more = scene.with_obstacles(scene.obstacles)
-    assert len(more.obstacles) == 2 and more.task == scene.task
-    assert np.allclose(more.obstacles[1].center, scene.obstacles[0].center)
-
-
 # Spatial scenes ---------------------------------------------------------------------------
 
 POSE = {'start': {'position': [0.5, -0.2, 0.4], 'orientation': [1.0, 0.0, 0.0, 0.0]},
@@ -199,13 +191,6 @@ def test_tolerate_is_kept_in_joint_order():
     assert panda(tolerate=None).tolerated_joints == tuple(range(7))
     assert scene.with_tolerated(None).tolerate is None
     assert scene.with_tolerated(['panda_joint3']).tolerated_joints == (2,)
-
-
-def test_with_task_rebinds_a_spatial_arm():
-    scene = panda()
-    moved = scene.with_task(Task((0.4, 0.0, 0.5), (0.4, 0.1, 0.5)))
-    assert moved.robot.task_kind == 'position' and moved.robot.model is scene.robot.model
-    assert moved.obstacles == scene.obstacles and moved.tolerate == scene.tolerate
 
 
 def test_urdf_and_dh_robots_inline(tmp_path):
@@ -328,3 +313,4 @@ def test_a_planar_arm_takes_planar_points_only():
     with pytest.raises(InputError, match=r'task\.goal: a planar arm takes \[x, y\]'):
         parse_scene(data)
     assert isinstance(parse_scene(GOOD).robot, PlanarChain)
+

@@ -430,38 +430,9 @@ def test_frozen_joints_are_the_whole_robot_with_those_joints_held(rng):
     assert np.allclose(jacobian, np.delete(whole_jacobian, FROZEN[0], axis=2))
 
 
-# The task maps' rotation helpers -----------------------------------------------------------
-
-@pytest.mark.parametrize('angle', [0.0, 1e-9, 1e-6, 1e-3, 0.7, 2.0, np.pi - 1e-3,
-                                   np.pi - 1e-5, np.pi - 1e-9, np.pi])
-def test_rotation_log_is_scipys_rotation_vector(angle, rng):
-    for axis in Rotation.random(20, random_state=rng.integers(1 << 31)).apply([0.0, 0.0, 1.0]):
-        log = kinematics.rotation_log(Rotation.from_rotvec(angle * axis).as_matrix())
-        assert np.linalg.norm(log) == pytest.approx(angle, abs=1e-7)
-        if angle < np.pi - 1e-4:
-            assert np.allclose(log, angle * axis, atol=1e-9)
-        else:  # a half turn about u is one about -u
-            assert min(np.linalg.norm(log - angle * axis),
-                       np.linalg.norm(log + angle * axis)) < 1e-6
-            assert np.allclose(Rotation.from_rotvec(log).as_matrix(),
-                               Rotation.from_rotvec(angle * axis).as_matrix(), atol=1e-7)
-
-
-def test_quaternions_and_axis_bases(rng):
-    for quaternion in Rotation.random(20, random_state=rng.integers(1 << 31)).as_quat():
-        scaled = 1.3 * quaternion  # normalised first
-        assert np.allclose(kinematics.quaternion_rotation(scaled),
-                           Rotation.from_quat(quaternion).as_matrix(), atol=1e-12)
-    axes = Rotation.random(20, random_state=rng.integers(1 << 31)).apply([0.0, 0.0, 1.0])
-    for axis in np.vstack([axes, np.eye(3), -np.eye(3)]):
-        first, second = kinematics.axis_basis(axis)
-        frame = np.column_stack([first, second, axis])
-        assert np.allclose(frame.T @ frame, np.eye(3), atol=1e-12)
-        assert np.linalg.det(frame) == pytest.approx(1.0)
-
-
 @pytest.mark.parametrize('radius', [-0.5, float('nan'), float('inf'), True, '0.1'])
 def test_a_planar_chain_refuses_a_link_radius_that_is_not_a_finite_length(radius):
     """Built in Python, not parsed: a negative radius would read as extra clearance."""
     with pytest.raises(InputError, match='robot.link_radius'):
         PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=radius)
+

@@ -26,7 +26,6 @@ from ftplan_testing import (
 from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import load_scene, robot_from_urdf
-from ftplan_ros.core.model.chain import ChainModel
 from ftplan_ros.core.model.robot import task_residuals
 from ftplan_ros.core.model.urdf import chain_from_urdf
 
@@ -269,15 +268,7 @@ def test_robot_yamls_load_with_their_disabled_collisions(name):
     assert robot.model.tool_frame == listed['tip_link']
 
 
-def test_a_chain_model_checks_its_arrays():
-    with pytest.raises(ValueError, match='placements must have shape'):
-        ChainModel('x', ('a',), ('base', 'l1'), np.zeros((2, 4, 4)), np.zeros((1, 3)),
-                   np.eye(4), (None,))
-    with pytest.raises(ValueError, match='n \\+ 1 links'):
-        ChainModel('x', ('a',), ('base',), np.zeros((1, 4, 4)), np.zeros((1, 3)),
-                   np.eye(4), (None,))
-
-
 def test_chain_from_urdf_names_its_caller(urdf_file):
     with pytest.raises(InputError, match=r'^arm\.tip_link'):
         chain_from_urdf(bot_urdf(), 'gripper', where='arm')
+
