@@ -35,6 +35,15 @@ def jacobian(robot, theta):
     return task_residuals(robot, robot.forward_kinematics(theta), theta)[1][0]
 
 
+def triangle_points(corners, count):
+    """Barycentric grid points (m, n) of a triangle (3, n) or triangles (T, 3, n), corners
+    included: `count` steps along each side. Dense samples to check a certificate against."""
+    weights = np.array([(i, j, count - i - j) for i in range(count + 1)
+                        for j in range(count + 1 - i)], dtype=float) / count
+    corners = np.asarray(corners, dtype=float)
+    return np.einsum('wk,...kn->...wn', weights, corners).reshape(-1, corners.shape[-1])
+
+
 @cache
 def robot_config(name: str, task_kind: str = 'pose'):
     """The robot of config/robots/<name>.yaml, bound to `task_kind` when it is spatial."""

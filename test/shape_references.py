@@ -9,10 +9,7 @@ from ftplan_testing import CUBE, TETRAHEDRON
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from ftplan_ros.core.model.geometry import (
-    Shape,
-    transform,
-)
+from ftplan_ros.core.model.geometry import Shape, transform
 
 SPACING = 0.002  # [m] between surface samples: sampled distances exceed the truth by less
 

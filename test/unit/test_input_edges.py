@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from ftplan_testing import SCENES
 
-from ftplan_ros.core import CollisionChecker, Obstacle, load_scene, plan, recover
+from ftplan_ros.core import load_scene, plan, recover
 from ftplan_ros.core.io.scene_file import parse_scene
 from ftplan_ros.core.paper.verification import VerificationOptions
 
@@ -129,14 +129,4 @@ def test_a_path_that_is_not_a_regular_file_is_refused_without_reading_it(path):
 
 def test_benchmark_sizes_that_cannot_fit_in_memory_are_refused():
     one_line_error(ftplan('bench', '--cells', 100000), '--cells: must be at most')
-
-
-def test_obstacles_out_of_reach_do_not_change_the_plan():
-    """1,000 boxes far away are culled (they took 427 s through the planner node once)."""
-    scene = load_scene(SCENES / 'fig3a.yaml')
-    far = [Obstacle('box', (20.0 + k % 40, 20.0 + k // 40, 0.0), size=(0.2, 0.2, 0.2))
-           for k in range(1000)]
-    crowded = scene.with_obstacles(far)
-    assert len(CollisionChecker(crowded.robot, crowded.obstacles)._obstacles) == 3
-    assert np.allclose(plan(crowded).theta_s, plan(scene).theta_s)
 

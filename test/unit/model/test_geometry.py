@@ -15,12 +15,7 @@ from shape_references import (
     surface_points,
 )
 
-from ftplan_ros.core.model.geometry import (
-    rotation_from_rpy,
-    separation,
-    signed_distance,
-    support,
-)
+from ftplan_ros.core.model.geometry import rotation_from_rpy, separation, signed_distance, support
 from ftplan_ros.core.model.scene import Obstacle
 
 

@@ -2,13 +2,13 @@
 
 The checker's distances come in tiers (checker.py); whatever the tier, a value must
 never exceed the true distance, and it must equal it where it claims to be exact.
-References here are written independently of the core: signed distances of the
-obstacles in closed form, shapes' surfaces sampled densely.
+References (test/shape_references.py) are written independently of the core: signed
+distances of the obstacles in closed form, shapes' surfaces sampled densely.
 """
 
 import numpy as np
 import pytest
-from ftplan_testing import bot, robot_config
+from ftplan_testing import SCENES, bot, robot_config
 from shape_references import (
     SPACING,
     closest,
@@ -19,29 +19,14 @@ from shape_references import (
     surface_points,
 )
 
+from ftplan_ros.core import load_scene, plan
 from ftplan_ros.core.collision import checker as checker_module
 from ftplan_ros.core.collision.checker import CollisionChecker
-from ftplan_ros.core.collision.distance_kernels import (
-    BOX,
-    CAPSULE,
-    CODES,
-    CYLINDER,
-    SPHERE,
-    link_box_clearance,
-    link_clearance_over_box,
-    planar_joint_points,
-    planar_link_clearances,
-    segment_distance,
-    segment_signed_distance,
-)
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import with_disabled_collisions
 from ftplan_ros.core.model.chain import ChainModel
 from ftplan_ros.core.model.dh import DHRow, chain_from_dh
-from ftplan_ros.core.model.geometry import (
-    Shape,
-    signed_distance,
-)
+from ftplan_ros.core.model.geometry import Shape
 from ftplan_ros.core.model.robot import LinkShape, PlanarChain
 from ftplan_ros.core.model.scene import Obstacle, Scene, Task
 from ftplan_ros.core.model.spatial import SpatialArm
@@ -160,65 +145,6 @@ def test_planar_spheres_against_the_segments_by_brute_force(rng):
             points = joints[j] + t * (joints[j + 1] - joints[j])
             expected = min(distance_to_obstacle(ob, points).min() for ob in obstacles) - 0.07
             assert expected - 5e-4 <= row[j] <= expected + 1e-9  # samples 0.5 mm apart
-
-
-@pytest.mark.parametrize('links', [(1.0, 1.0, 1.0), (0.7, 1.2, 0.5, 0.9)])
-def test_link_box_clearance_is_below_every_configuration_of_the_box(links, rng):
-    """A lower bound over the box, by dense sampling; tight for tiny boxes."""
-    lengths = np.array(links)
-    n = len(lengths)
-    centres = np.hstack([rng.uniform(-2.5, 2.5, (8, 2)), rng.uniform(-0.3, 0.3, (8, 1))])
-    radii = rng.uniform(0.05, 0.4, 8)
-    points = np.zeros((n + 1, 2))
-    closest = np.inf
-    for _ in range(150):
-        centre = rng.uniform(-np.pi, np.pi, n)
-        half = rng.uniform(0.0, 0.4, n) * rng.choice([1e-4, 1.0])
-        planar_joint_points(lengths, centre, points)
-        corners = centre + half * rng.uniform(-1.0, 1.0, (3000, n))
-        corners[:2] = centre + half * np.array([1.0, -1.0])[:, None]  # two opposite corners
-        sampled = planar_link_clearances(lengths, 0.0, centres, radii, corners).min(axis=0)
-        for k in range(n):
-            bound = link_box_clearance(points, k, lengths[k], centre[:k + 1].sum(), half,
-                                       centres, radii)
-            assert bound <= sampled[k], (k, centre, half)
-            if half.max() < 1e-3:
-                closest = min(closest, sampled[k] - bound)
-                assert sampled[k] - bound < 1e-3, (k, centre, half)
-    assert closest < 1e-4
-
-
-def test_link_clearance_over_box_is_sound_and_decides_what_either_bound_does(rng):
-    """The clearance at the centre is exact; clear is sound by dense sampling and True
-    wherever the lever or the fan bound alone says so."""
-    lengths = np.array([1.0, 0.8, 0.6])
-    centres = np.hstack([rng.uniform(-2.2, 2.2, (6, 2)), rng.uniform(-0.2, 0.2, (6, 1))])
-    radii = rng.uniform(0.05, 0.3, 6)
-    arms = np.array([[lengths[a:k + 1].sum() for a in range(3)] for k in range(3)])
-    points = np.zeros((4, 2))
-    outcomes, by_fan = set(), 0
-    for _ in range(400):
-        centre = rng.uniform(-np.pi, np.pi, 3)
-        half = rng.uniform(0.0, 0.15, 3)
-        reach = rng.choice([0.0, 0.05])
-        planar_joint_points(lengths, centre, points)
-        corners = centre + half * rng.uniform(-1.0, 1.0, (1500, 3))
-        sampled = planar_link_clearances(lengths, 0.0, centres, radii, corners).min(axis=0)
-        at_centre = planar_link_clearances(lengths, 0.0, centres, radii, centre[None])[0]
-        for k in range(3):
-            motion = float(half @ arms[k]) + 1e-9
-            nearest, clear = link_clearance_over_box(points, k, lengths[k],
-                                                     centre[:k + 1].sum(), half, motion,
-                                                     centres, radii, reach)
-            assert nearest == at_centre[k]
-            lever = at_centre[k] - reach > motion
-            fan = link_box_clearance(points, k, lengths[k], centre[:k + 1].sum(), half,
-                                     centres, radii) > reach
-            assert clear or not (lever or fan)
-            assert not clear or sampled[k] > reach, (k, centre, half)
-            outcomes.add(clear)
-            by_fan += clear and not lever
-    assert outcomes == {True, False} and by_fan > 10
 
 
 # Tier 1: closed forms with a sphere -----------------------------------------------------
@@ -464,6 +390,16 @@ def test_a_thick_links_radius_counts_in_its_reach_when_culling(radius, monkeypat
     assert (measured[0, 2] < 0.0) == (radius > 1.4)
 
 
+def test_obstacles_out_of_reach_do_not_change_the_plan():
+    """1,000 boxes far away are culled (they took 427 s through the planner node once)."""
+    scene = load_scene(SCENES / 'fig3a.yaml')
+    far = [Obstacle('box', (20.0 + k % 40, 20.0 + k // 40, 0.0), size=(0.2, 0.2, 0.2))
+           for k in range(1000)]
+    crowded = scene.with_obstacles(far)
+    assert len(CollisionChecker(crowded.robot, crowded.obstacles)._obstacles) == 3
+    assert np.allclose(plan(crowded).theta_s, plan(scene).theta_s)
+
+
 # Self-collision, the base, channel names ------------------------------------------------
 
 def folding_arm(disabled=None):
@@ -518,42 +454,3 @@ def test_channels_are_named_per_shape():
     links = checker.channel_links
     assert np.all(links[:len(moving), 1] == -1)
     assert {tuple(pair) for pair in links[len(moving):].tolist()} == set(robot.self_collision_pairs)
-
-
-def test_segment_distance_against_brute_force(rng):
-    t = np.linspace(0.0, 1.0, 601)
-    cases = [rng.uniform(-1.0, 1.0, (4, 3)) for _ in range(40)]
-    p = rng.uniform(-1.0, 1.0, 3)
-    cases += [np.array([p, p, [1.0, 0, 0], [0, 1.0, 0]]),   # a point and a segment
-              np.array([p, p, p + 0.3, p + 0.3]),           # two points
-              np.array([[0, 0, 0], [1.0, 0, 0], [0, 0.2, 0], [1.0, 0.2, 0]]),   # parallel
-              np.array([[0, 0, 0], [1.0, 0, 0], [2.0, 0.1, 0], [3.0, 0.1, 0]]),  # collinear-ish
-              np.array([[0, 0, 0], [1.0, 0, 0], [0.5, -1.0, 0], [0.5, 1.0, 0]])]  # crossing
-    for p1, q1, p2, q2 in cases:
-        first = p1 + t[:, None] * (q1 - p1)
-        second = p2 + t[:, None] * (q2 - p2)
-        brute = np.linalg.norm(first[:, None] - second[None], axis=2).min()
-        value = segment_distance(p1, q1, p2, q2)
-        step = (np.linalg.norm(q1 - p1) + np.linalg.norm(q2 - p2)) / 600
-        assert brute - step - 1e-12 <= value <= brute + 1e-12
-
-
-@pytest.mark.parametrize('kind', ['sphere', 'box', 'cylinder', 'capsule'])
-def test_segment_signed_distance_against_brute_force(kind, rng):
-    code = CODES[kind]
-    assert code in (SPHERE, BOX, CYLINDER, CAPSULE)
-    shape = random_link_shape(kind, rng)
-    parameters = checker_module.shape_parameters(shape)
-    t = np.linspace(0.0, 1.0, 20001)[:, None]
-    for _ in range(20):
-        frame = random_pose(rng, 0.2)
-        start, end = rng.uniform(-0.5, 0.5, (2, 3))
-        points = start + t * (end - start)
-        brute = float(signed_distance(shape, (points - frame[:3, 3]) @ frame[:3, :3]).min())
-        exact = segment_signed_distance(code, parameters, frame, start, end, np.inf)
-        assert brute - 1e-4 <= exact <= brute + 1e-9
-        enough = brute - 0.05
-        early = segment_signed_distance(code, parameters, frame, start, end, enough)
-        assert early <= brute + 1e-9
-        assert early >= enough or abs(early - exact) < 1e-12
-

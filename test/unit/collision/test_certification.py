@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from ftplan_testing import triangle_points
 
 from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.collision.certification import (
@@ -16,6 +17,7 @@ from ftplan_ros.core.model.scene import Obstacle
 from ftplan_ros.core.paper.failure_surface import FailureSurface
 
 ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'), link_radius=0.05)
+BARE_ARM = PlanarChain((1.0, 1.0, 1.0), ('a', 'b', 'c'))  # the paper's arm: links of no radius
 
 
 def random_web(rng, paths=12, waypoints=20):
@@ -33,13 +35,6 @@ def random_web(rng, paths=12, waypoints=20):
 def random_disks(rng, count=3):
     return [Obstacle('sphere', (*rng.uniform(-2.5, 2.5, 2), 0.0), radius=rng.uniform(0.1, 0.4))
             for _ in range(count)]
-
-
-def triangle_points(corners, count=12):
-    """Barycentric grid points (m, n) of triangles (T, 3, n), their corners included."""
-    weights = np.array([(i, j, count - i - j) for i in range(count + 1)
-                        for j in range(count + 1 - i)], dtype=float) / count
-    return np.einsum('wk,tkn->twn', weights, corners).reshape(-1, corners.shape[-1])
 
 
 def live_corners(surface):
@@ -77,7 +72,7 @@ def test_a_certified_web_never_collides_and_blocks_lose_nothing(backend):
             surface, np.flatnonzero(surface.live_triangles))], margin, depth)
         assert ok or not by_triangle[0], trial
         if ok:
-            assert checker.min_clearance(triangle_points(corners)).min() > margin, trial
+            assert checker.min_clearance(triangle_points(corners, 12)).min() > margin, trial
             assert where == (-1, -1) and np.isfinite(smallest) and smallest > margin
             blocked += backend == 'auto' and samples < len(corners)
         else:
@@ -98,7 +93,7 @@ def test_a_web_refusal_names_a_vertex_near_the_collision():
         assert not ok and smallest < 0.0, trial
         vertex = path * surface.paths.shape[1] + waypoint
         around = surface.triangles[np.any(surface.triangles == vertex, axis=1)]
-        nearest = checker.min_clearance(triangle_points(surface.vertices[around])).min()
+        nearest = checker.min_clearance(triangle_points(surface.vertices[around], 12)).min()
         assert nearest < 0.01, trial
 
 
@@ -256,3 +251,116 @@ def test_the_lever_arms_a_caller_changes_are_its_own():
     arms[:] = 0.0
     assert np.array_equal(checker.lever_arms(), expected) and expected.max() > 0.0
     assert not certify_simplices(checker, through, 0.0, 6)[0]
+
+
+def test_certified_triangles_never_collide_under_dense_sampling():
+    rng = np.random.default_rng(8)
+    checker = CollisionChecker(BARE_ARM, [Obstacle('sphere', (1.3, 0.8, 0.0), radius=0.25),
+                                     Obstacle('sphere', (-0.5, 1.5, 0.0), radius=0.3)])
+    certified = refused = 0
+    for _ in range(60):
+        center = rng.uniform(-np.pi, np.pi, 3)
+        corners = center + rng.uniform(-0.15, 0.15, (3, 3))
+        ok, _, _, _ = certify_simplices(checker, corners[None], 0.0, max_depth=6)
+        sampled = checker.min_clearance(triangle_points(corners, 40)).min()
+        if ok:
+            certified += 1
+            assert sampled > 0
+        else:
+            refused += 1
+    assert certified > 10 and refused > 3  # both outcomes exercised
+
+
+@pytest.mark.parametrize('corner_count', [2, 3])
+def test_the_compiled_planar_certificate_is_sound_and_at_least_the_general_one(corner_count):
+    """The compiled pass adds a tighter bound (link_box_clearance) to the general one's."""
+    obstacles = [Obstacle('sphere', (1.3, 0.8, 0.0), radius=0.25),
+                 Obstacle('sphere', (-0.5, 1.5, 0.1), radius=0.3),
+                 Obstacle('sphere', (30.0, 0.0, 0.0), radius=1.0)]  # culled: caps the clearance
+    compiled = CollisionChecker(ARM, obstacles)
+    general = CollisionChecker(ARM, obstacles, backend='fcl')
+    assert compiled.planar_disks is not None and general.planar_disks is None
+    rng = np.random.default_rng(12)
+    outcomes, fewer = set(), 0
+    for trial in range(80):
+        centres = rng.uniform(-np.pi, np.pi, (6, 1, 3))
+        corners = centres + rng.uniform(-0.2, 0.2, (6, corner_count, 3))
+        margin = 0.0 if trial % 2 else 0.05
+        ok, _, smallest, samples = certify_simplices(compiled, corners, margin, 5)
+        expected = certify_simplices(general, corners, margin, 5)
+        assert ok or not expected[0]
+        assert samples <= expected[3] and smallest >= expected[2] - 1e-12
+        fewer += samples < expected[3]
+        if ok:
+            points = triangle_points(corners[:, [0, 1, -1]], 40)  # two corners: a segment
+            assert general.min_clearance(points).min() > margin
+        outcomes.add(ok)
+    assert outcomes == {True, False} and fewer > 10
+
+
+def test_the_triangles_certified_cover_every_triangle_of_the_web():
+    """Every live triangle is certified, or is an edge or a corner of a proper one that is.
+
+    Webs with padded columns (a repeated last point), repeated paths and shared points,
+    as the recovery sheets build them, on a coarse lattice so that points coincide; in
+    half of them most points are moved off it, so that most triangles share no point.
+    """
+    rng = np.random.default_rng(3)
+    for trial in range(200):
+        paths = rng.integers(0, 4, (int(rng.integers(2, 8)), int(rng.integers(2, 7)), 3)) * 0.5
+        if trial % 2:
+            paths = paths + rng.uniform(0.0, 0.01, paths.shape) * (rng.random(paths.shape) < 0.7)
+        for k in range(len(paths)):
+            if rng.random() < 0.5:  # padded: the column ends early
+                end = int(rng.integers(1, paths.shape[1]))
+                paths[k, end:] = paths[k, end - 1]
+        paths[:, 0] = paths[0, 0]
+        if len(paths) > 2 and rng.random() < 0.5:
+            paths[2] = paths[1]  # a cut: a repeated path
+        surface = FailureSurface(paths, 0, (), (0,))
+        ids = surface.vertex_ids
+        kept = [frozenset(ids[t]) for t in _distinct_triangles(
+            surface, np.flatnonzero(surface.live_triangles))]
+        proper = [k for k in kept if len(k) == 3]
+        assert len(proper) == len(set(proper)), trial
+        for triangle in surface.triangles[surface.live_triangles]:
+            points = frozenset(ids[triangle])
+            assert points in kept or (len(points) < 3 and any(points <= k for k in proper)), \
+                (trial, sorted(points))
+
+
+@pytest.mark.parametrize('angle', [1e17, 6e307, 1e308])
+def test_huge_finite_angles_fail_closed(angle):
+    """Angles whose kinematics round by radians, or whose corner sums overflow, are refused.
+
+    (Both used to be certified: a corner sum of inf gave NaN distances that min() dropped.)
+    A disk on the tool at the middle corner: each simplex collides there.
+    """
+    theta = np.array([angle, -angle, 0.0])
+    tip = BARE_ARM.joint_positions(theta)[-1]
+    checker = CollisionChecker(BARE_ARM, [Obstacle('sphere', (tip[0], tip[1], 0.0), radius=0.3)])
+    assert checker.min_clearance(theta[None])[0] < 0.0
+    for corners in ([theta, theta + [0, 0, 0.01], theta - [0, 0, 0.01]],
+                    [theta, theta + [0, 0, 0.01]]):
+        ok, failed, _, _ = certify_simplices(checker, np.array([corners]), 0.0, 7)
+        assert not ok and failed == 0
+    moderate = np.array([LARGEST_ANGLE, -LARGEST_ANGLE, 0.0])  # the largest still measured
+    assert certify_simplices(CollisionChecker(BARE_ARM, []),
+                             np.array([[moderate, moderate - [0.01, -0.01, 0.01]]]), 0.0, 7)[0]
+
+
+def test_a_triangle_through_an_obstacle_is_refused_and_the_margin_counts():
+    checker = CollisionChecker(BARE_ARM, [Obstacle('sphere', (1.5, 0.0, 0.0), radius=0.1)])
+    through = np.array([[[0.0, 0.3, 0.0], [0.0, -0.3, 0.0], [0.05, 0.0, 0.0]]])
+    assert not certify_simplices(checker, through, 0.0, 6)[0]
+    clear = np.array([[[2.0, 0.0, 0.0], [2.1, 0.0, 0.0], [2.0, 0.1, 0.0]]])
+    ok, _, smallest, _ = certify_simplices(checker, clear, 0.0, 6)
+    assert ok
+    # `smallest` may be a lower bound (clearances well above what is needed are bounds):
+    # a margin above the exact clearance at the centroid must be refused.
+    at_centroid = checker.min_clearance(clear.mean(axis=1)).min()
+    assert smallest <= at_centroid
+    assert not certify_simplices(checker, clear, at_centroid + 0.01, 6)[0]
+    segment = np.array([[[0.0, 0.3, 0.0], [0.0, -0.3, 0.0]]])
+    assert not certify_simplices(checker, segment, 0.0, 6)[0]
+
