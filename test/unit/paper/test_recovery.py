@@ -91,6 +91,17 @@ def test_locks_at_the_ends(plans):
         assert at_goal.length == pytest.approx(0.0, abs=1e-9)
 
 
+def test_a_lock_a_hair_past_either_end_of_the_path_recovers(plans):
+    _, result = plans['fig3a']
+    path = result.nominal_path
+    for end, outward in ((path[0], path[0] - path[1]), (path[-1], path[-1] - path[-2])):
+        for joint in range(3):
+            theta = end.copy()
+            theta[joint] += 1e-9 * np.sign(outward[joint] or 1.0)
+            rescue = recover(result.surface, theta, joint)
+            assert rescue is not None and rescue.path[0, joint] == theta[joint]
+
+
 def test_the_hit_path_keeps_its_joint_fixed(plans):
     _, result = plans['fig3a']
     surface = result.surface

@@ -1,5 +1,6 @@
 """The self-check: its certificates against brute force, and its refusals."""
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -11,6 +12,7 @@ from ftplan_ros.core.model.robot import PlanarChain
 from ftplan_ros.core.model.scene import Obstacle, Task
 from ftplan_ros.core.paper.failure_surface import FailureSurface
 from ftplan_ros.core.paper.verification import (
+    VerificationOptions,
     certify_surface,
     goal_row_error,
     structure_problem,
@@ -112,3 +114,10 @@ def test_a_goal_row_off_the_goal_fails_the_check(free_plan):
                               Task((2.0, 0.0), tuple(X_GOAL + [0.05, 0.0]), 0.01))
     assert not verdict.ok and 'goal row strays' in verdict.reason
 
+
+@pytest.mark.parametrize('options', [
+    {'margin': -0.3}, {'margin': math.nan}, {'chord_samples': 0}, {'recovery_moments': 0},
+    {'max_depth': -1}])
+def test_options_that_would_weaken_the_check_are_refused(options):
+    with pytest.raises(ValueError):
+        VerificationOptions(**options)

@@ -317,34 +317,3 @@ def test_random_webs_agree_with_the_referee_and_with_recover():
                     assert (recover(surface, point, joint) is None) == is_stuck
     assert outcomes[True] >= 8 and outcomes[False] >= 8, outcomes
 
-
-def test_web_points_and_segments_are_numbered_by_their_coordinates():
-    """`vertex_ids` and `edge_ids` against numbering the distinct rows with np.unique.
-
-    Webs on a coarse lattice, with padded columns, a repeated path, the shared θ_s and,
-    in a third of them, joint 1 the same at many points, where the ids come from sorting
-    by the other joints.
-    """
-    rng = np.random.default_rng(11)
-    for trial in range(300):
-        shape = (int(rng.integers(1, 9)), int(rng.integers(1, 9)), int(rng.integers(1, 4)))
-        paths = rng.integers(0, rng.choice([2, 4, 1000]), shape) * 0.25
-        for k in range(len(paths)):
-            if rng.random() < 0.5:
-                end = int(rng.integers(1, paths.shape[1] + 1))
-                paths[k, end:] = paths[k, end - 1]
-        paths[:, 0] = paths[0, 0]
-        if len(paths) > 2 and rng.random() < 0.5:
-            paths[2] = paths[1]
-        if trial % 3 == 0:
-            paths[..., 0] = 1.0
-        surface = FailureSurface(paths, 0, (), (0,))
-        _, points = np.unique(surface.vertices, axis=0, return_inverse=True)
-        assert np.array_equal(surface.vertex_ids, points.reshape(-1)), trial
-        ends = np.sort(points.reshape(-1)[surface.edges], axis=1)
-        _, segments = np.unique(ends, axis=0, return_inverse=True)
-        pairs = np.unique(np.stack([segments.reshape(-1), surface.edge_ids]), axis=1)
-        assert pairs.shape[1] == segments.max(initial=-1) + 1, trial  # the same partition
-        assert np.array_equal(np.unique(surface.edge_ids), np.arange(pairs.shape[1])), trial
-        assert (surface.point_count, surface.segment_count) == (points.max() + 1,
-                                                                 pairs.shape[1]), trial

@@ -9,11 +9,9 @@ from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.model.angles import configuration_difference, wrap_angle
 from ftplan_ros.core.model.robot import PlanarChain
 from ftplan_ros.core.paper.failure_planes import (
-    FailurePlaneHit,
     crossing_segments,
     failure_plane_hits,
 )
-from ftplan_ros.core.paper.failure_surface import choose_hits, smallest_windows
 from ftplan_ros.core.paper.manifolds import (
     mark_obstacle_free,
     project_to_preimage,
@@ -203,52 +201,3 @@ def test_a_loop_free_all_round_comes_as_two_laps(goal_branches):
         points = branch.arc_points(arc.first, arc.count)
         assert np.allclose(points[arc.lap:], points[:arc.lap] + branch.period)
 
-
-def _windows_by_definition(hits: list[list[float]], lap: float) -> list[tuple[float, float]]:
-    """Each left hit's window to the nearest right end completing the joints, O(H^2)."""
-    flat = sorted((p, j) for j, positions in enumerate(hits) for p in positions)
-    windows = []
-    for left in range(len(flat)):
-        for right in range(left, len(flat)):
-            if len({j for _, j in flat[left:right + 1]}) == len(hits):
-                window = (flat[left][0], flat[right][0])
-                if window not in windows and window[0] < lap:
-                    windows.append(window)
-                break
-    return sorted(windows, key=lambda w: w[1] - w[0])
-
-
-def test_smallest_windows_and_the_hits_nearest_each_windows_middle():
-    """The batched sweep against its definition: windows, then inside and nearest the middle."""
-    rng = np.random.default_rng(4)
-    for _ in range(200):
-        n_starts, n_joints, lap = rng.integers(1, 4), rng.integers(1, 4), rng.uniform(5, 25)
-        hits = [[[FailurePlaneHit(j, np.full(3, float(k)), float(p)) for k, p in
-                  enumerate(np.sort(np.round(rng.uniform(0, 20, rng.integers(1, 6)), 1)))]
-                 for j in range(n_joints)] for _ in range(n_starts)]
-        flat = [(s, j, h) for s, per_start in enumerate(hits)
-                for j, joint_hits in enumerate(per_start) for h in joint_hits]
-        # Shuffled, but each start's hits of a joint in order along the arc, as promised.
-        keys = rng.random(len(flat))
-        groups = np.array([s * n_joints + j for s, j, _ in flat])
-        for group in np.unique(groups):
-            keys[groups == group] = np.sort(keys[groups == group])
-        flat = [flat[i] for i in np.argsort(keys)]
-        owners, windows, chosen = smallest_windows(
-            np.array([s for s, _, _ in flat]), np.array([j for _, j, _ in flat]),
-            np.array([h.position for _, _, h in flat]), n_starts, n_joints, lap)
-        for s, per_start in enumerate(hits):
-            mine = owners == s
-            assert [tuple(w) for w in windows[mine]] == _windows_by_definition(
-                [[h.position for h in joint_hits] for joint_hits in per_start], lap)
-            for window, row in zip(windows[mine], chosen[mine], strict=True):
-                middle = 0.5 * (window[0] + window[1])
-                for j, joint_hits in enumerate(per_start):
-                    inside = [h for h in joint_hits if window[0] <= h.position <= window[1]]
-                    picked = flat[row[j]]
-                    assert picked[:2] == (s, j)
-                    assert picked[2] is min(inside, key=lambda h: abs(h.position - middle))
-                assert [h.position for h in choose_hits(per_start, tuple(window))] == \
-                    [flat[k][2].position for k in row]
-    with pytest.raises(ValueError, match='holds no hit'):
-        choose_hits([[FailurePlaneHit(0, np.zeros(3), 5.0)]], (0.0, 1.0))
