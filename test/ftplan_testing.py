@@ -51,6 +51,17 @@ def robot_config(name: str, task_kind: str = 'pose'):
     return robot if robot.task_kind == 'planar' else robot.with_task_kind(task_kind)
 
 
+# bench/crowded.py's settings for tests: up to six disks, each draw proved on 64^3 cells.
+CROWDED = {'disks': 6, 'attempts': 12, 'cells': 64}
+
+
+@cache
+def make_crowded(seed: int) -> Scene:
+    """The crowded scene (bench/crowded.py) of `seed` with the settings CROWDED."""
+    from ftplan_ros.bench.crowded import crowded_scene
+    return crowded_scene(np.random.default_rng(seed), **CROWDED)
+
+
 # The Barrett WAM's first four joints (standard DH): a spherical shoulder and an elbow.
 WAM4 = {
     'type': 'dh', 'link_radius': 0.04, 'tip_offset': [0.0, 0.0, 0.35],
