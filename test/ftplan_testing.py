@@ -44,6 +44,13 @@ def triangle_points(corners, count):
     return np.einsum('wk,...kn->...wn', weights, corners).reshape(-1, corners.shape[-1])
 
 
+def within_limits(robot, thetas) -> bool:
+    """Whether configurations (..., n) [rad] keep the robot's joint limits (within 1e-9 rad)."""
+    limits = robot.limits
+    return np.all((thetas >= limits[:, 0] - 1e-9) & (thetas <= limits[:, 1] + 1e-9)
+                  | robot.periodic)
+
+
 @cache
 def robot_config(name: str, task_kind: str = 'pose'):
     """The robot of config/robots/<name>.yaml, bound to `task_kind` when it is spatial."""

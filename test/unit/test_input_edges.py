@@ -7,7 +7,7 @@ import sys
 import pytest
 from ftplan_testing import SCENES
 
-from ftplan_ros.core import load_scene, plan
+from ftplan_ros.core import load_scene
 from ftplan_ros.core.io.scene_file import parse_scene
 
 ARM = {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]}
@@ -72,15 +72,6 @@ def test_the_plan_json_has_no_infinity_without_obstacles(tmp_path):
     data = json.loads(out.read_text(), parse_constant=refuse)
     assert data['feasible'] is True
     assert data['stats']['min_clearance_m'] is None  # infinite: no obstacle anywhere
-
-
-def test_a_disk_just_clear_of_the_base_is_not_taken_for_one_covering_it():
-    near = [{'type': 'sphere', 'center': [-0.205, 0.0], 'radius': 0.2}]
-    scene = parse_scene({'robot': ARM, 'task': TASK, 'obstacles': near})
-    plan(scene)  # no InputError: the disk is 5 mm from the base
-    covering = [{'type': 'sphere', 'center': [-0.195, 0.0], 'radius': 0.2}]
-    with pytest.raises(ValueError, match='covers the robot base'):
-        plan(parse_scene({'robot': ARM, 'task': TASK, 'obstacles': covering}))
 
 
 @pytest.mark.parametrize('limits', [[-1000.0, 1000.0], [-7.0, 0.0]])

@@ -98,14 +98,6 @@ def test_recovery_paths_are_shortest_in_the_slice_of_the_web(sheets_plan):
     assert equal >= 0.9 * compared
 
 
-def test_a_paper_plan_is_named_for_its_method():
-    result = plan(load_scene(SCENES / 'fig3a.yaml'))
-    assert result.feasible and result.stats['method'] == PAPER_METHOD
-    # Its hypercube is the paper's V_sg: θ_s and the goal points span it.
-    box = failure_hypercube(result.surface.theta_s, result.surface.goal_points)
-    assert all(np.array_equal(a, b) for a, b in zip(result.hypercube, box, strict=True))
-
-
 # bench/crowded.py ---------------------------------------------------------------------
 
 def test_crowded_scenes_repeat_and_keep_their_disks_clear():
@@ -157,15 +149,6 @@ def test_the_shipped_sheets_scenes_are_solved_by_the_sheets_alone(name):
     assert result.feasible and result.stats['method'] == METHOD
     # The paper's second round of starts waited for the sheets, which planned: it never ran.
     assert result.stats['paper_plan_stats']['candidate_subdivisions'] == 1
-
-
-def test_the_papers_second_round_runs_when_the_sheets_decide_nothing():
-    """A grid too coarse to plan or to prove: the paper's finer starts are tried after it."""
-    result = plan(load_scene(SCENES / 'crowded_sheets_100.yaml'),
-                  PlannerOptions(sheet_cells=(32,)))
-    assert not result.feasible and not result.stats['proved_infeasible']
-    assert result.stats['candidate_subdivisions'] == PlannerOptions().candidate_refinement
-    assert result.reason.startswith('no failure-tolerant plan found within the resolution')
 
 
 def test_no_room_to_start_is_proved_on_the_grids_where_they_can():

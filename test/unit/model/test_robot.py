@@ -410,26 +410,6 @@ def test_planar_mismatched_names_and_limits_are_rejected():
         PlanarChain((1.0, 1.0), ('a', 'b'), joint_limits=((0.0, 1.0),))
 
 
-# Frozen joints --------------------------------------------------------------------------
-
-def test_frozen_joints_are_the_whole_robot_with_those_joints_held(rng):
-    whole = robot_config('panda', 'position')
-    frozen = FrozenJoints(whole, *FROZEN)
-    assert frozen.joint_names == tuple(name for j, name in enumerate(whole.joint_names)
-                                       if j not in FROZEN[0])
-    thetas = sample(frozen, rng, (10,))
-    expanded = frozen.expand(thetas)
-    assert np.all(expanded[:, list(FROZEN[0])] == FROZEN[1])
-    assert np.array_equal(np.delete(expanded, FROZEN[0], axis=1), thetas)
-    assert np.allclose(frozen.forward_kinematics(thetas), whole.forward_kinematics(expanded))
-    assert np.allclose(frozen.link_frames(thetas), whole.link_frames(expanded))
-    x = whole.forward_kinematics(sample(whole, rng))
-    assert np.allclose(task_errors(frozen, x, thetas), task_errors(whole, x, expanded))
-    _, whole_jacobian = task_residuals(whole, x, expanded)
-    _, jacobian = task_residuals(frozen, x, thetas)
-    assert np.allclose(jacobian, np.delete(whole_jacobian, FROZEN[0], axis=2))
-
-
 @pytest.mark.parametrize('radius', [-0.5, float('nan'), float('inf'), True, '0.1'])
 def test_a_planar_chain_refuses_a_link_radius_that_is_not_a_finite_length(radius):
     """Built in Python, not parsed: a negative radius would read as extra clearance."""

@@ -1,13 +1,14 @@
 """The planner end to end: a trivial, the paper's, and impossible cases; bad input; brute force."""
 
+import re
+
 import numpy as np
 import pytest
-from ftplan_testing import SCENES, paper_scene
+from ftplan_testing import SCENES, paper_scene, robot_config, within_limits
 
 from ftplan_ros.core import (
     CollisionChecker,
     InputError,
-    ManifoldCache,
     PlannerOptions,
     load_scene,
     parse_scene,
@@ -16,17 +17,12 @@ from ftplan_ros.core import (
     task_errors,
 )
 from ftplan_ros.core.grid.exhaustive import recoverable_in_plane
+from ftplan_ros.core.grid.recovery_sheets import PAPER_METHOD
 from ftplan_ros.core.model.paths import densify, point_at_fraction
-from ftplan_ros.core.model.scene import Obstacle, Task
-from ftplan_ros.core.planning.surface_search import SurfaceSearch, straight_fans
+from ftplan_ros.core.model.scene import Obstacle, Scene, Task
+from ftplan_ros.core.paper.failure_planes import failure_hypercube
 
 X_GOAL = np.array([1.0, 0.0])
-
-
-@pytest.fixture(scope='module')
-def fig3a():
-    scene = load_scene(SCENES / 'fig3a.yaml')
-    return scene, plan(scene)
 
 
 def test_obstacle_free_paper_task_is_feasible_and_reported():
@@ -93,41 +89,6 @@ def test_a_given_start_is_checked_not_replaced(fig3a):
     blocked = scene.with_obstacles([Obstacle('sphere', (*scene.robot.joint_positions(
         result.theta_s)[1], 0.0), radius=0.05)])
     assert not plan(blocked, start_configuration=result.theta_s).feasible
-
-
-class _NanChecker(CollisionChecker):
-    """A checker whose clearances are all NaN, as a broken distance would give."""
-
-    def clearance(self, thetas, needed=np.inf, refine=True):
-        return np.full_like(super().clearance(thetas, needed, refine), np.nan)
-
-
-def test_a_nan_clearance_reads_as_a_collision(fig3a):
-    """The search's own screens of θ_s and of the web's vertices fail closed on NaN."""
-    scene, result = fig3a
-    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(0),
-                           lambda line: None, ManifoldCache())
-    webs = []
-    build = search._fine_surface
-    search._fine_surface = lambda *args: webs.append(args) or build(*args)
-    assert search.run(result.theta_s).feasible and webs
-    assert search._given_start(result.theta_s).shape == (1, 3)
-    search.checker = _NanChecker(scene.robot, scene.obstacles)
-    assert search._fine_surface(*webs[-1]) is None
-    assert search._given_start(result.theta_s).shape == (0, 3)
-
-
-def test_a_search_whose_webs_all_fail_to_build_says_so(fig3a):
-    """When no fine web is clear at its vertices, no surface was checked: the reason says
-    that, not that the check failed."""
-    scene, _ = fig3a
-    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(0),
-                           lambda line: None, ManifoldCache())
-    search._fine_surface = lambda *args: None
-    result = search.run()
-    assert not result.feasible
-    assert 'best failure surfaces proposed reached the self-check' in result.reason
-    assert 'check failed' not in result.reason
 
 
 def test_infeasible_scene_says_why():
@@ -218,11 +179,122 @@ def test_a_narrow_band_of_starts_is_found_whatever_the_sampling(seed):
             assert scene.task.reached(task_errors(scene.robot, X_GOAL, rescue.path[-1]))
 
 
-@pytest.mark.parametrize('n', [3, 7])
-def test_ranking_fans_are_the_points_along_each_straight_path(n):
-    """straight_fans (P, W, G, n) against start + w/W (goal - start), written with arrays."""
-    rng = np.random.default_rng(2)
-    starts, goals = rng.normal(size=(40, n)), rng.normal(size=(40, 6, n))
-    steps = np.arange(1, 9)[None, :, None, None] / 8
-    expected = starts[:, None, None, :] + steps * (goals[:, None] - starts[:, None, None, :])
-    assert np.array_equal(straight_fans(starts, goals, 8), expected)
+
+def test_a_paper_plan_is_named_for_its_method():
+    result = plan(load_scene(SCENES / 'fig3a.yaml'))
+    assert result.feasible and result.stats['method'] == PAPER_METHOD
+    # Its hypercube is the paper's V_sg: θ_s and the goal points span it.
+    box = failure_hypercube(result.surface.theta_s, result.surface.goal_points)
+    assert all(np.array_equal(a, b) for a, b in zip(result.hypercube, box, strict=True))
+
+
+def test_the_papers_second_round_runs_when_the_sheets_decide_nothing():
+    """A grid too coarse to plan or to prove: the paper's finer starts are tried after it."""
+    result = plan(load_scene(SCENES / 'crowded_sheets_100.yaml'),
+                  PlannerOptions(sheet_cells=(32,)))
+    assert not result.feasible and not result.stats['proved_infeasible']
+    assert result.stats['candidate_subdivisions'] == PlannerOptions().candidate_refinement
+    assert result.reason.startswith('no failure-tolerant plan found within the resolution')
+
+
+def test_a_disk_just_clear_of_the_base_is_not_taken_for_one_covering_it():
+    plan(paper_scene(obstacles=[((-0.205, 0.0), 0.2)]))  # no InputError: 5 mm from the base
+    with pytest.raises(ValueError, match='covers the robot base'):
+        plan(paper_scene(obstacles=[((-0.195, 0.0), 0.2)]))
+
+
+# Spatial arms ---------------------------------------------------------------------------
+# The tasks were found beforehand with a throwaway search (random collision-free
+# configurations q1, q2 = q1 + N(0, 0.5), tasks FK(q1) -> FK(q2)) and are written here as
+# plain numbers. The tests check each plan on their own terms: dense collision sampling,
+# task errors, joint limits.
+
+IIWA_ELBOW = 'iiwa_joint_4'
+IIWA_POSE = Task((0.33281, 0.462817, 0.705411, 0.755692, -0.431346, 0.324635, -0.370786),
+                 (0.102688, 0.465602, 1.019076, 0.635032, -0.0633, 0.518829, -0.568809),
+                 goal_tolerance=0.005, orientation_tolerance=0.01)
+IIWA_OBSTACLES = (Obstacle('sphere', (0.586, 0.531, 0.618), radius=0.12),
+                  Obstacle('box', (0.178, 0.764, 1.077), size=(0.2, 0.3, 0.15),
+                           rpy=(0.3, 0.0, 0.5)),
+                  Obstacle('cylinder', (0.18, -0.315, 0.39), radius=0.08, length=0.4,
+                           rpy=(0.5, 0.2, 0.0)))
+MOMENTS = 9
+STEP = 0.001  # [m] most any point of the arm moves between two collision samples
+
+
+def iiwa_scene(tolerate):
+    robot = robot_config('iiwa14', 'pose')
+    scene = Scene(robot, IIWA_OBSTACLES).with_task(IIWA_POSE)
+    return scene.with_tolerated(tolerate)
+
+
+@pytest.fixture(scope='module')
+def iiwa_pose():
+    names = robot_config('iiwa14').joint_names
+    scene = iiwa_scene([name for name in names if name != IIWA_ELBOW])
+    return scene, plan(scene)
+
+
+def dense(path, checker):
+    """Points of a joint path (k, n) [rad] such that no point of the arm moves > STEP between."""
+    arms = checker.lever_arms()
+    pieces = [path[:1]]
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        count = max(1, int(np.ceil(np.max(arms @ np.abs(b - a)) / STEP)))
+        pieces.append(a + np.outer(np.arange(1, count + 1) / count, b - a))
+    return np.vstack(pieces)
+
+
+def test_a_pose_plan_tolerating_all_but_the_elbow_is_sound(iiwa_pose):
+    """Brute force: at 9 moments, every tolerated joint's lock has a safe way to the goal."""
+    scene, result = iiwa_pose
+    assert result.feasible, result.reason
+    robot = scene.robot
+    assert result.tolerated_joints == (0, 1, 2, 4, 5, 6)
+    assert result.stats['tolerated_joints'] == [n for n in robot.joint_names if n != IIWA_ELBOW]
+    assert_sound(scene, result)
+
+
+@pytest.mark.parametrize('joint', ['iiwa_joint_1', 'iiwa_joint_3'])
+def test_a_plan_tolerating_one_joint_is_found_and_sound(joint):
+    """One hit makes no strip of S_F by itself: the web takes its neighbours on M_g^F."""
+    scene = iiwa_scene([joint])
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.stats['tolerated_joints'] == [joint]
+    assert_sound(scene, result)
+
+
+def assert_sound(scene, result):
+    """Brute force: at 9 moments, every tolerated joint's lock has a safe way to the goal."""
+    robot, task = scene.robot, scene.task
+    assert task.reached(task_errors(robot, task.start, result.theta_s[None]))[0]
+    assert task.reached(task_errors(robot, task.goal, result.nominal_path[-1:]))[0]
+    assert within_limits(robot, result.surface.paths)
+    checker = CollisionChecker(robot, scene.obstacles)
+    assert checker.min_clearance(dense(result.nominal_path, checker), STEP).min() > 0.0
+    for progress in np.linspace(0.0, 1.0, MOMENTS):
+        theta = point_at_fraction(result.nominal_path, progress)
+        for joint in result.tolerated_joints:
+            rescue = recover(result.surface, theta, joint)
+            where = f'{robot.joint_names[joint]} locked at progress {progress:.3f}'
+            assert rescue is not None, where
+            path = rescue.path
+            assert np.array_equal(path[0], theta) and np.all(path[:, joint] == theta[joint])
+            assert within_limits(robot, path), where
+            samples = dense(path, checker)
+            clearance = checker.min_clearance(samples, STEP)
+            assert clearance.min() > 0.0, f'{where}: collides at sample {clearance.argmin()}'
+            errors = task_errors(robot, task.goal, path[-1])
+            assert task.reached(errors), f'{where}: ends {errors} from the goal'
+
+
+def test_tolerating_the_elbow_too_is_infeasible_and_says_why():
+    """On a spherical shoulder and wrist the elbow keeps its angle along a pose's self-motion."""
+    scene = iiwa_scene(None)
+    result = plan(scene)
+    assert not result.feasible
+    assert IIWA_ELBOW in result.reason
+    others = [name for name in scene.robot.joint_names if name != IIWA_ELBOW]
+    assert result.stats['coverable_joints'] == others
+    assert re.search(r'keeps its angle along each branch', result.reason), result.reason
