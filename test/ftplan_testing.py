@@ -5,6 +5,8 @@ modules named `conftest`.)
 """
 
 import struct
+import subprocess
+import sys
 from functools import cache
 from pathlib import Path
 
@@ -18,6 +20,20 @@ from ftplan_ros.core.model.scene import Scene
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / 'config' / 'scenes'
 ROBOTS = REPO / 'config' / 'robots'
+
+
+def ftplan(*args, cwd=None) -> subprocess.CompletedProcess:
+    """Run the `ftplan` command with `args` as a user would; its output is text."""
+    return subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def one_line_error(run: subprocess.CompletedProcess, field: str) -> None:
+    """The CLI's bad-input answer: exit 2 and one line naming the field, no traceback."""
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('ftplan: error: ') and field in lines[0], \
+        run.stderr
 
 
 def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:

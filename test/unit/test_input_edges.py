@@ -1,30 +1,14 @@
 """Edge cases of input and options that once crashed, passed NaN or rejected a good scene."""
 
 import json
-import subprocess
-import sys
 
 import pytest
-from ftplan_testing import SCENES
+from ftplan_testing import SCENES, ftplan, one_line_error
 
-from ftplan_ros.core import load_scene
 from ftplan_ros.core.io.scene_file import parse_scene
 
 ARM = {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]}
 TASK = {'start': [2.0, 0.0], 'goal': [1.0, 0.0]}
-
-
-def ftplan(*args):
-    return subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
-
-
-def one_line_error(run, field):
-    """The CLI's bad-input answer: exit 2 and one line naming the field, no traceback."""
-    assert run.returncode == 2, run.stderr
-    lines = run.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith('ftplan: error: ') and field in lines[0], \
-        run.stderr
 
 
 def test_a_scene_that_is_not_utf8_is_one_line_of_error(tmp_path):
@@ -72,28 +56,6 @@ def test_the_plan_json_has_no_infinity_without_obstacles(tmp_path):
     data = json.loads(out.read_text(), parse_constant=refuse)
     assert data['feasible'] is True
     assert data['stats']['min_clearance_m'] is None  # infinite: no obstacle anywhere
-
-
-@pytest.mark.parametrize('limits', [[-1000.0, 1000.0], [-7.0, 0.0]])
-def test_joint_limits_wider_than_a_turn_either_way_are_refused(limits):
-    with pytest.raises(ValueError, match=r'robot\.joint_limits\[1\]: limits must be within ±2π'):
-        parse_scene({'robot': dict(ARM, joint_limits=[None, limits, None]), 'task': TASK})
-
-
-def test_yaml_reads_exponent_floats_and_refuses_duplicate_keys(tmp_path):
-    good = tmp_path / 'tight.yaml'
-    good.write_text('robot: {type: planar, link_lengths: [1.0, 1.0, 1.0]}\n'
-                    'task: {start: [2.0, 0.0], goal: [1.0, 0.0], goal_tolerance: 1e-3}\n')
-    assert load_scene(good).task.goal_tolerance == pytest.approx(1e-3)
-    twice = tmp_path / 'twice.yaml'
-    twice.write_text('robot: {type: planar, link_lengths: [1.0, 1.0, 1.0]}\n'
-                     'task: {start: [2.0, 0.0], goal: [1.0, 0.0], start: [1.5, 0.0]}\n')
-    one_line_error(ftplan('plan', twice), "duplicate key 'start'")
-
-
-@pytest.mark.parametrize('path', ['/dev/zero', '/'])
-def test_a_path_that_is_not_a_regular_file_is_refused_without_reading_it(path):
-    one_line_error(ftplan('plan', path), 'is not a regular file')
 
 
 def test_benchmark_sizes_that_cannot_fit_in_memory_are_refused():

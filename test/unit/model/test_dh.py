@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 from ftplan_testing import WAM4, wam4
 
-from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import parse_scene
 from ftplan_ros.core.model.dh import DHRow, chain_from_dh
 from ftplan_ros.core.model.spatial import SpatialArm
@@ -126,16 +125,3 @@ def test_joint_limits_and_offsets_from_the_scene(rng):
     theta = rng.uniform(-1.0, 1.0, 3)
     assert np.allclose(arm.tool_frames(theta), dh_frames(table, theta, [0, 0, 0.05])[2])
 
-
-@pytest.mark.parametrize('row, field', [
-    ({'a': 0.1, 'alpha': 0.0}, r'robot\.rows\[0\]\.d: is missing'),
-    ({'a': 0.1, 'alpha': 0.0, 'd': 'x'}, r'robot\.rows\[0\]\.d: must be a number'),
-    ({'a': 0.1, 'alpha': 0.0, 'd': 0.1, 'theta': 1.0}, r'robot\.rows\[0\]\.theta: unknown key'),
-    ({'a': 0.1, 'alpha': 0.0, 'd': 0.1, 'limits': [1.0, 0.0]},
-     r'robot\.rows\[0\]\.limits: lower limit'),
-])
-def test_bad_rows_name_their_field(row, field):
-    with pytest.raises(InputError, match=field):
-        parse_scene({'robot': {'type': 'dh', 'rows': [row]}})
-    with pytest.raises(InputError, match=r'robot\.rows: needs at least one joint'):
-        parse_scene({'robot': {'type': 'dh', 'rows': []}})

@@ -5,7 +5,6 @@ Jacobians in LOCAL_WORLD_ALIGNED on the URDF's full model (continuous joints as
 (cos, sin), joints off the chain at 0), at random configurations.
 """
 
-import itertools
 import re
 
 import numpy as np
@@ -20,10 +19,8 @@ from ftplan_testing import (
     bot,
     bot_urdf,
     robot_config,
-    write_binary_stl,
 )
 
-from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import load_scene, robot_from_urdf
 from ftplan_ros.core.model.robot import task_residuals
@@ -182,19 +179,6 @@ def test_continuous_and_unaligned_joints(bot_urdf_file):
     assert np.allclose(robot.tool_frames(theta), robot.tool_frames(theta + [2 * np.pi, 0, 0, 0]))
 
 
-@pytest.fixture
-def urdf_file(tmp_path):
-    """Write a variant of the test robot's URDF (and its mesh) into tmp_path; return its path."""
-    write_binary_stl(tmp_path / 'tet.stl', *TETRAHEDRON)
-    (tmp_path / 'garbage.stl').write_bytes(b'solid \x00\xff not a mesh\n' * 7)
-
-    def write(xml):
-        path = tmp_path / 'variant.urdf'
-        path.write_text(xml)
-        return path
-    return write
-
-
 FLOATING = bot_urdf().replace('type="continuous"', 'type="floating"')
 PLANAR = bot_urdf().replace('type="continuous"', 'type="planar"')
 PRISMATIC = bot_urdf().replace('<joint name="elbow" type="revolute"',
@@ -239,33 +223,6 @@ def test_bad_urdfs_give_one_line_naming_the_field(urdf_file, xml, tip, base, fie
         robot_from_urdf(path.read_text(), tip, base, mesh_dirs=[str(path.parent)])
     assert '\n' not in str(error.value)
     assert re.search(words, str(error.value)), str(error.value)
-
-
-def test_a_urdf_scene_finds_its_mesh_beside_the_file(urdf_file):
-    path = urdf_file(bot_urdf())
-    scene = path.parent / 'scene.yaml'
-    scene.write_text(yaml.safe_dump({'robot': {'type': 'urdf', 'file': path.name,
-                                               'tip_link': 'tcp'}}))
-    robot = load_scene(scene).robot
-    assert [item.shape.kind for item in robot.collision_shapes].count('mesh') == 1
-
-
-@pytest.mark.parametrize('name', ['panda', 'iiwa14'])
-def test_robot_yamls_load_with_their_disabled_collisions(name):
-    robot = robot_config(name)
-    listed = yaml.safe_load((ROBOTS / f'{name}.yaml').read_text())['robot']
-    disabled = {tuple(sorted(robot.link_names.index(link) for link in pair))
-                for pair in listed['disabled_collisions']}
-    assert robot.model.disabled_pairs == disabled
-    with_geometry = sorted({item.link for item in robot.collision_shapes})
-    expected = [pair for pair in itertools.combinations(with_geometry, 2)
-                if pair not in disabled]
-    assert list(robot.self_collision_pairs) == expected
-    checker = CollisionChecker(robot, [])
-    checked = {tuple(links) for links in checker.channel_links.tolist() if links[1] >= 0}
-    assert checked == set(expected)
-    assert robot.link_names[0] == listed['base_link']
-    assert robot.model.tool_frame == listed['tip_link']
 
 
 def test_chain_from_urdf_names_its_caller(urdf_file):

@@ -1,11 +1,15 @@
+"""Scene files (core/io/scene_file.py): the format of CONTRACT.md, each bad value named."""
+
+import itertools
 import math
 import shutil
 
 import numpy as np
 import pytest
 import yaml
-from ftplan_testing import ROBOTS, SCENES, WAM4, robot_config, write_bot
+from ftplan_testing import ROBOTS, SCENES, WAM4, bot_urdf, robot_config, write_bot
 
+from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.fingerprint import scene_to_dict
 from ftplan_ros.core.io.scene_file import load_scene, parse_scene
@@ -118,6 +122,12 @@ def test_bad_boxes():
     bad = with_change(('obstacles',), [{'type': 'box', 'center': [1, 1], 'size': [0.2, -1]}])
     with pytest.raises(InputError, match=r'obstacles\[0\]\.size\[1\]: must be > 0'):
         parse_scene(bad)
+
+
+@pytest.mark.parametrize('limits', [[-1000.0, 1000.0], [-7.0, 0.0]])
+def test_joint_limits_wider_than_a_turn_either_way_are_refused(limits):
+    with pytest.raises(ValueError, match=r'robot\.joint_limits\[1\]: limits must be within ±2π'):
+        parse_scene(with_change(('robot', 'joint_limits'), [None, limits, None]))
 
 
 @pytest.mark.parametrize('text, message', [
@@ -242,11 +252,6 @@ def test_a_scene_without_a_robot_takes_the_callers(tmp_path):
         load_scene(path)
 
 
-def test_spatial_scenes_are_not_written_back():
-    with pytest.raises(ValueError, match='only planar scenes'):
-        scene_to_dict(panda())
-
-
 def task_with(point_key, value):
     task = yaml.safe_load(yaml.safe_dump(POSE))
     task['start'][point_key] = value
@@ -314,3 +319,45 @@ def test_a_planar_arm_takes_planar_points_only():
         parse_scene(data)
     assert isinstance(parse_scene(GOOD).robot, PlanarChain)
 
+
+# Robots from URDF files and DH tables ---------------------------------------------------
+
+@pytest.mark.parametrize('row, field', [
+    ({'a': 0.1, 'alpha': 0.0}, r'robot\.rows\[0\]\.d: is missing'),
+    ({'a': 0.1, 'alpha': 0.0, 'd': 'x'}, r'robot\.rows\[0\]\.d: must be a number'),
+    ({'a': 0.1, 'alpha': 0.0, 'd': 0.1, 'theta': 1.0}, r'robot\.rows\[0\]\.theta: unknown key'),
+    ({'a': 0.1, 'alpha': 0.0, 'd': 0.1, 'limits': [1.0, 0.0]},
+     r'robot\.rows\[0\]\.limits: lower limit'),
+])
+def test_bad_rows_name_their_field(row, field):
+    with pytest.raises(InputError, match=field):
+        parse_scene({'robot': {'type': 'dh', 'rows': [row]}})
+    with pytest.raises(InputError, match=r'robot\.rows: needs at least one joint'):
+        parse_scene({'robot': {'type': 'dh', 'rows': []}})
+
+
+def test_a_urdf_scene_finds_its_mesh_beside_the_file(urdf_file):
+    path = urdf_file(bot_urdf())
+    scene = path.parent / 'scene.yaml'
+    scene.write_text(yaml.safe_dump({'robot': {'type': 'urdf', 'file': path.name,
+                                               'tip_link': 'tcp'}}))
+    robot = load_scene(scene).robot
+    assert [item.shape.kind for item in robot.collision_shapes].count('mesh') == 1
+
+
+@pytest.mark.parametrize('name', ['panda', 'iiwa14'])
+def test_robot_yamls_load_with_their_disabled_collisions(name):
+    robot = robot_config(name)
+    listed = yaml.safe_load((ROBOTS / f'{name}.yaml').read_text())['robot']
+    disabled = {tuple(sorted(robot.link_names.index(link) for link in pair))
+                for pair in listed['disabled_collisions']}
+    assert robot.model.disabled_pairs == disabled
+    with_geometry = sorted({item.link for item in robot.collision_shapes})
+    expected = [pair for pair in itertools.combinations(with_geometry, 2)
+                if pair not in disabled]
+    assert list(robot.self_collision_pairs) == expected
+    checker = CollisionChecker(robot, [])
+    checked = {tuple(links) for links in checker.channel_links.tolist() if links[1] >= 0}
+    assert checked == set(expected)
+    assert robot.link_names[0] == listed['base_link']
+    assert robot.model.tool_frame == listed['tip_link']
