@@ -1,9 +1,12 @@
 """The `ftplan` command as users run it: outputs, files and exit codes."""
 
+import io
 import json
 
 import pytest
 from ftplan_testing import SCENES, ftplan, one_line_error
+
+from ftplan_ros.cli import Progress
 
 
 def test_plan_writes_the_contract_json(tmp_path):
@@ -154,3 +157,19 @@ def test_the_plan_json_has_no_infinity_without_obstacles(tmp_path):
 def test_benchmark_sizes_that_cannot_fit_in_memory_are_refused():
     one_line_error(ftplan('bench', '--cells', 100000), '--cells: must be at most')
 
+
+def test_progress_prints_rate_and_eta_at_most_once_a_second():
+    now = [100.0]
+    stream = io.StringIO()
+    progress = Progress(stream, clock=lambda: now[0])
+    progress.begin(200)                       # 200 done by an earlier run
+    now[0] = 110.0
+    progress.count(300, 1200, 'tasks')        # 100 in 10 s: 10/s, 900 left: 90 s
+    now[0] = 110.5
+    progress.count(305, 1200, 'tasks')        # within the second: quiet
+    now[0] = 190.0
+    progress.count(1200, 1200, 'tasks')       # the end always prints
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == 2
+    assert lines[0].endswith('300/1200 tasks, 10.0 tasks/s, ETA 90 s')
+    assert lines[1].endswith('1200/1200 tasks, 11.1 tasks/s')

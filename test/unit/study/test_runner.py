@@ -4,27 +4,19 @@ The grids are tiny (a few dozen plans of about 50 ms), so each test takes second
 """
 
 import os
-import subprocess
-import sys
 from functools import partial
 
 import numpy as np
 import pytest
-from ftplan_testing import SCENES
 
 from ftplan_ros.core import plan
-from ftplan_ros.study import (
-    ResultStore,
-    StudyError,
-    load_study,
-    open_client,
-    parse_study,
-    run_study,
-    summarize,
-)
+from ftplan_ros.study import ResultStore, StudyError, open_client, run_study, summarize
 from ftplan_ros.study.figures import map_figure, sweep_figure
 from ftplan_ros.study.results import OUTCOMES
 from ftplan_ros.study.tasks import plan_study_task
+
+from .interrupt import Interrupt
+from .specs import study_of
 
 # 5 x 4 starts over the fig3a scene: inside and outside the reach, near and in obstacles.
 MAP = {'scene': 'fig3a.yaml', 'vary': {'start': {'x': [-3.2, 2.0, 5], 'y': [-1.8, 1.2, 4]}},
@@ -43,12 +35,6 @@ COMPARED = ['task', 'start_x', 'start_y', 'goal_x', 'goal_y', 'random_obstacles'
 # of the suite (a worker killed by a test was once not back after 180 s: tests that kill
 # workers get a cluster of their own)
 WORKERS_BACK = 180
-
-
-@pytest.fixture(scope='module')
-def client():
-    with open_client(None, workers=2) as client:    # the command's LocalCluster
-        yield client
 
 
 @pytest.fixture
@@ -70,10 +56,6 @@ def reference():
     return plan_here(study, range(study.tasks))
 
 
-def study_of(data, name='test'):
-    return parse_study(data, name=name, directory=SCENES)
-
-
 def rows(table):
     return table.select(COMPARED).to_pylist()
 
@@ -82,24 +64,6 @@ def plan_here(study, tasks):
     """The rows as this process plans them, without Dask."""
     return [{key: row.get(key) for key in COMPARED}
             for row in (plan_study_task(study, k) for k in tasks)]
-
-
-class Interrupt:
-    """A progress printer that stops the study (like Ctrl-C) after `chunks` chunks."""
-
-    def __init__(self, chunks):
-        self.chunks = chunks
-
-    def line(self, text):
-        pass
-
-    def begin(self, done=0):
-        pass
-
-    def count(self, done, total, unit=''):
-        self.chunks -= 1
-        if self.chunks == 0:
-            raise KeyboardInterrupt
 
 
 def test_a_small_map_on_two_workers(client, reference, tmp_path):
@@ -207,7 +171,7 @@ def test_a_task_that_raises_becomes_an_error_row(client, tmp_path):
     run_study(study, store, client, plan_task=raise_on_task_2)
     table = store.read()
     error = table.column('error').to_pylist()
-    assert error[2].startswith('ZeroDivisionError: a bug in task 2 (at test_study.py:')
+    assert error[2].startswith('ZeroDivisionError: a bug in task 2 (at test_runner.py:')
     assert table.column('outcome').to_pylist()[2] == 'error'
     assert table.column('start_x').to_pylist()[2] == study.task(2).start[0]
     assert all(e is None for k, e in enumerate(error) if k != 2)
@@ -258,23 +222,3 @@ def test_a_task_that_always_kills_its_worker_becomes_an_error_row(doomed_client,
     assert error[4].startswith('KilledWorker')
     assert [r for r in rows(table) if r['task'] != 4] == [r for r in reference if r['task'] != 4]
 
-
-def test_the_command_resumes_a_study_on_a_running_scheduler(client, tmp_path):
-    spec = tmp_path / 'map.yaml'
-    spec.write_text(f'scene: {SCENES / "fig3a.yaml"}\nvary: {{start: {{x: [0.5, 2.5, 3], '
-                    'y: [-0.5, 0.5, 2]}}\nchunk: 2\n')
-    out = tmp_path / 'out'
-    study = load_study(spec)
-    with pytest.raises(KeyboardInterrupt):                   # a first run, stopped after 1 chunk
-        run_study(study, ResultStore(out, study), client, Interrupt(chunks=1))
-    command = [sys.executable, '-m', 'ftplan_ros.cli', 'study', spec, '--out', out,
-               '--scheduler', client.scheduler.address]
-    run = subprocess.run(command, capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, run.stderr
-    assert 'computed 2 chunks, skipped 1 found in the folder' in run.stderr
-    assert '6/6 tasks' in run.stderr and 'tasks/s' in run.stderr
-    assert 'study map: map of 6 tasks (6 in the results)' in run.stdout
-    outcomes = ResultStore(out, study).read().column('outcome').to_pylist()
-    for name in OUTCOMES:
-        assert f'{name:<24}{outcomes.count(name):>8}' in run.stdout
-    assert f'wrote {out / "map.png"}' in run.stdout and (out / 'map.png').stat().st_size > 10_000
