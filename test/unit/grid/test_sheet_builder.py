@@ -2,10 +2,12 @@
 
 from dataclasses import replace
 
-from ftplan_testing import SCENES
+import pytest
+from ftplan_testing import SCENES, paper_scene
 
 from ftplan_ros.core import load_scene, plan
 from ftplan_ros.core.grid.recovery_sheets import METHOD
+from ftplan_ros.core.grid.sheet_builder import goal_step
 
 from .references import assert_every_lock_recovers
 
@@ -19,3 +21,11 @@ def test_a_fine_goal_tolerance_gets_a_goal_row_fine_enough():
     assert result.feasible and result.stats['method'] == METHOD, result.reason
     assert result.stats['goal_error_bound_m'] <= 0.001
     assert_every_lock_recovers(finer, result, 100)
+
+
+@pytest.mark.parametrize('tolerance, step', [(0.05, 0.15), (0.01, 0.15), (0.0025, 0.075),
+                                             (0.0001, 0.015)])
+def test_goal_row_chords_shorten_as_the_square_root_of_a_tolerance_below_the_reach_over_300(
+        tolerance, step):
+    """The paper's arm reaches 3 m: chords of 0.15 rad down to a tolerance of 1 cm."""
+    assert goal_step(paper_scene(tolerance=tolerance)) == pytest.approx(step)
