@@ -1,4 +1,4 @@
-"""Part 3 of the self-check on any web (core/slices.py) against a brute-force slice.
+"""Part 3 of the self-check on any web (core/paper/slices.py) against a brute-force slice.
 
 The referee here knows nothing of the sweep: for each level it intersects every live
 triangle of the web with the plane {θ_i = level} (a convex set: the hull of its edges'

@@ -1,4 +1,4 @@
-"""Approaches from where the arm stands (core/approach.py): M_s^F, RRT-Connect, locks."""
+"""Approaches from where the arm stands (core/planning/approach.py): M_s^F, RRT-Connect, locks."""
 
 from dataclasses import replace
 
