@@ -179,9 +179,8 @@ def test_a_narrow_band_of_starts_is_found_whatever_the_sampling(seed):
             assert scene.task.reached(task_errors(scene.robot, X_GOAL, rescue.path[-1]))
 
 
-
-def test_a_paper_plan_is_named_for_its_method():
-    result = plan(load_scene(SCENES / 'fig3a.yaml'))
+def test_a_paper_plan_is_named_for_its_method(fig3a):
+    _, result = fig3a
     assert result.feasible and result.stats['method'] == PAPER_METHOD
     # Its hypercube is the paper's V_sg: θ_s and the goal points span it.
     box = failure_hypercube(result.surface.theta_s, result.surface.goal_points)
