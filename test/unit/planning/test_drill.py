@@ -1,3 +1,5 @@
+"""Drills (core/planning/drill.py): random locks along a plan, each trial checked again."""
+
 import json
 
 import numpy as np

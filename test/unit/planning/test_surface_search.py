@@ -1,4 +1,4 @@
-"""The paper's surface search (core/planning/surface_search.py): its screens fail closed."""
+"""The paper's surface search (core/planning/surface_search.py): fail-closed screens, fans."""
 
 import numpy as np
 import pytest
