@@ -14,3 +14,17 @@ def bot_urdf_file(tmp_path_factory):
     """The test robot's URDF file, with its STL mesh beside it (ftplan_testing.bot)."""
     from ftplan_testing import write_bot  # not at import: test/ros shares this file
     return write_bot(tmp_path_factory.mktemp('testbot'))
+
+
+@pytest.fixture
+def urdf_file(tmp_path):
+    """Return write(xml) -> path: a URDF in tmp_path beside the test mesh and a garbage mesh."""
+    from ftplan_testing import TETRAHEDRON, write_binary_stl  # as above
+    write_binary_stl(tmp_path / 'tet.stl', *TETRAHEDRON)
+    (tmp_path / 'garbage.stl').write_bytes(b'solid \x00\xff not a mesh\n' * 7)
+
+    def write(xml):
+        path = tmp_path / 'variant.urdf'
+        path.write_text(xml)
+        return path
+    return write

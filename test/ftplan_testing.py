@@ -5,6 +5,8 @@ modules named `conftest`.)
 """
 
 import struct
+import subprocess
+import sys
 from functools import cache
 from pathlib import Path
 
@@ -18,6 +20,20 @@ from ftplan_ros.core.model.scene import Scene
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / 'config' / 'scenes'
 ROBOTS = REPO / 'config' / 'robots'
+
+
+def ftplan(*args, cwd=None) -> subprocess.CompletedProcess:
+    """Run the `ftplan` command with `args` as a user would; its output is text."""
+    return subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def one_line_error(run: subprocess.CompletedProcess, field: str) -> None:
+    """The CLI's bad-input answer: exit 2 and one line naming the field, no traceback."""
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('ftplan: error: ') and field in lines[0], \
+        run.stderr
 
 
 def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:
@@ -35,11 +51,38 @@ def jacobian(robot, theta):
     return task_residuals(robot, robot.forward_kinematics(theta), theta)[1][0]
 
 
+def triangle_points(corners, count):
+    """Barycentric grid points (m, n) of a triangle (3, n) or triangles (T, 3, n), corners
+    included: `count` steps along each side. Dense samples to check a certificate against."""
+    weights = np.array([(i, j, count - i - j) for i in range(count + 1)
+                        for j in range(count + 1 - i)], dtype=float) / count
+    corners = np.asarray(corners, dtype=float)
+    return np.einsum('wk,...kn->...wn', weights, corners).reshape(-1, corners.shape[-1])
+
+
+def within_limits(robot, thetas) -> bool:
+    """Whether configurations (..., n) [rad] keep the robot's joint limits (within 1e-9 rad)."""
+    limits = robot.limits
+    return np.all((thetas >= limits[:, 0] - 1e-9) & (thetas <= limits[:, 1] + 1e-9)
+                  | robot.periodic)
+
+
 @cache
 def robot_config(name: str, task_kind: str = 'pose'):
     """The robot of config/robots/<name>.yaml, bound to `task_kind` when it is spatial."""
     robot = parse_scene({'robot': f'{name}.yaml'}, directory=ROBOTS).robot
     return robot if robot.task_kind == 'planar' else robot.with_task_kind(task_kind)
+
+
+# bench/crowded.py's settings for tests: up to six disks, each draw proved on 64^3 cells.
+CROWDED = {'disks': 6, 'attempts': 12, 'cells': 64}
+
+
+@cache
+def make_crowded(seed: int) -> Scene:
+    """The crowded scene (bench/crowded.py) of `seed` with the settings CROWDED."""
+    from ftplan_ros.bench.crowded import crowded_scene
+    return crowded_scene(np.random.default_rng(seed), **CROWDED)
 
 
 # The Barrett WAM's first four joints (standard DH): a spherical shoulder and an elbow.

@@ -1,17 +1,13 @@
 """The `ftplan` command as users run it: outputs, files and exit codes."""
 
+import io
 import json
-import subprocess
-import sys
 
 import pytest
 from descriptions import CYCLE_JOINT, panda_with
-from ftplan_testing import SCENES
+from ftplan_testing import SCENES, ftplan, one_line_error
 
-
-def ftplan(*args, cwd=None):
-    return subprocess.run([sys.executable, '-m', 'ftplan_ros.cli', *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=300)
+from ftplan_ros.cli import Progress
 
 
 def test_plan_writes_the_contract_json(tmp_path):
@@ -133,3 +129,65 @@ def test_a_urdf_that_is_no_tree_is_one_line_and_exit_2(tmp_path, extra, message)
     assert run.returncode == 2, run.stderr
     assert len(run.stderr.strip().splitlines()) == 1, run.stderr
     assert run.stderr.startswith(f'ftplan: error: {message}'), run.stderr
+# Input that once crashed or got through: one line of error, before any work ----------------
+
+def test_a_scene_that_is_not_utf8_is_one_line_of_error(tmp_path):
+    scene = tmp_path / 'latin1.yaml'
+    scene.write_bytes('robot: {type: planar}  # café\n'.encode('latin-1'))
+    one_line_error(ftplan('plan', scene), 'UTF-8')
+
+
+def test_a_number_too_big_for_a_float_is_one_line_of_error(tmp_path):
+    scene = tmp_path / 'big.yaml'
+    scene.write_text(f'robot: {{type: planar, link_lengths: [1.0, 1{"0" * 400}, 1.0]}}\n')
+    one_line_error(ftplan('plan', scene), 'robot.link_lengths[1]')
+
+
+@pytest.mark.parametrize('args, field', [
+    (['plan', SCENES / 'fig3a.yaml', '--png', 'figure.jpg'], '--png'),
+    (['plan', SCENES / 'fig3a.yaml', '--seed', '-1'], '--seed'),
+    (['drill', SCENES / 'fig3a.yaml', '--trials', '0'], '--trials'),
+    (['bench', '--scenes', '0'], '--scenes'),
+    (['bench', '--cells', '0'], '--cells'),
+    (['bench', '--grid-baseline', '8'], '--grid-baseline'),
+    (['bench', '--robot', 'panda', '--grid-baseline', '180'], '--grid-baseline'),
+    (['bench', '--robot', 'iiwa14', '--cells', '64'], '--cells: sets the planar3r benchmark'),
+    (['bench', '--robot', 'panda', '--crowded-cells', '64'], '--crowded-cells'),
+])
+def test_bad_flags_are_refused_before_any_work(tmp_path, args, field):
+    out = tmp_path / 'plan.json'
+    run = ftplan(*args, '--json', out) if args[0] == 'plan' else ftplan(*args)
+    one_line_error(run, field)
+    assert 'tracing' not in run.stderr and not out.exists()
+
+
+def test_the_plan_json_has_no_infinity_without_obstacles(tmp_path):
+    out = tmp_path / 'plan.json'
+    assert ftplan('plan', SCENES / 'paper_a_free.yaml', '--json', out).returncode == 0
+
+    def refuse(constant):
+        raise AssertionError(f'{constant} is not JSON')
+    data = json.loads(out.read_text(), parse_constant=refuse)
+    assert data['feasible'] is True
+    assert data['stats']['min_clearance_m'] is None  # infinite: no obstacle anywhere
+
+
+def test_benchmark_sizes_that_cannot_fit_in_memory_are_refused():
+    one_line_error(ftplan('bench', '--cells', 100000), '--cells: must be at most')
+
+
+def test_progress_prints_rate_and_eta_at_most_once_a_second():
+    now = [100.0]
+    stream = io.StringIO()
+    progress = Progress(stream, clock=lambda: now[0])
+    progress.begin(200)                       # 200 done by an earlier run
+    now[0] = 110.0
+    progress.count(300, 1200, 'tasks')        # 100 in 10 s: 10/s, 900 left: 90 s
+    now[0] = 110.5
+    progress.count(305, 1200, 'tasks')        # within the second: quiet
+    now[0] = 190.0
+    progress.count(1200, 1200, 'tasks')       # the end always prints
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == 2
+    assert lines[0].endswith('300/1200 tasks, 10.0 tasks/s, ETA 90 s')
+    assert lines[1].endswith('1200/1200 tasks, 11.1 tasks/s')
