@@ -5,13 +5,8 @@ import pytest
 
 from ftplan_ros.bench.spatial import DRILL_TRIALS, OBSTACLES, TaskRun, random_task, summarize
 from ftplan_ros.core import CollisionChecker
-from ftplan_ros.core.errors import InputError
 
 
-# Since the move to bench/ (dd68dec) CONFIG is Path(__file__).parents[2] / 'config', which is
-# ftplan_ros/config, not the repository's: `ftplan bench --robot panda` fails the same way.
-@pytest.mark.xfail(strict=True, raises=InputError,
-                   reason="bench/spatial.py's CONFIG points one folder too high")
 @pytest.mark.parametrize('name, elbow', [('panda', 'panda_joint4'), ('iiwa14', 'iiwa_joint_4')])
 def test_a_random_task_tolerates_all_but_the_elbow_among_obstacles_clear_of_the_base(name,
                                                                                     elbow):

@@ -1,16 +1,14 @@
 """Plan workers without ROS: a job plans in a worker as it plans here, errors come back, close."""
 
 import threading
-from pathlib import Path
 
 import numpy as np
 import pytest
+from ftplan_testing import SCENES
 
 from ftplan_ros.core import InputError, ManifoldCache, Task, load_scene
 from ftplan_ros.nodes.plan_jobs import PlanJob, PlanSettings, run_job
 from ftplan_ros.nodes.plan_pool import PlanPool
-
-SCENES = Path(__file__).resolve().parents[2] / 'config' / 'scenes'
 
 
 @pytest.fixture
