@@ -19,7 +19,12 @@ from ftplan_ros.core.model.angles import wrap_angle
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.core.planning.approach import straight_move_ends
 from ftplan_ros.core.validation import LARGEST_NUMBER
-from ftplan_ros.nodes.motion import fraction_at_time, progress_along, time_at_fraction, time_path
+from ftplan_ros.execution.motion import (
+    fraction_at_time,
+    progress_along,
+    time_at_fraction,
+    time_path,
+)
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
     obstacle_from_shape,

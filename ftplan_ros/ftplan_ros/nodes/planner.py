@@ -102,9 +102,9 @@ from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.core.model.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
 from ftplan_ros.core.planning.approach import Approach
 from ftplan_ros.core.planning.planner import check_plannable
+from ftplan_ros.execution.motion import time_path
 
 from .inputs import read_arm_state
-from .motion import time_path
 from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
 from .obstacles import shape_from_obstacle
 from .params import (

@@ -66,9 +66,10 @@ from ftplan_ros.core.model.paths import densify
 from ftplan_ros.core.model.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
 from ftplan_ros.core.model.task_space import POINT_SIZE, unit_vector
 from ftplan_ros.core.paper.manifolds import project_many, trace_self_motion_manifolds
+from ftplan_ros.execution.locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem
 
 from .inputs import angle_problem
-from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE, lock_angle_problem, read_lock_event
+from .lock_events import read_lock_event
 from .obstacle_topic import ObstacleTopic
 from .params import (
     add_validators,
