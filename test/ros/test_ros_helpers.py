@@ -33,7 +33,7 @@ from ftplan_ros.nodes.obstacles import (
     shape_from_obstacle,
 )
 from ftplan_ros.nodes.planner import display_web
-from ftplan_ros.nodes.sim import Motion, default_initial_configuration, task_scene
+from ftplan_ros.nodes.sim import task_scene
 from ftplan_ros.nodes.tasks import (
     bind_task_kind,
     convert_task_point,
@@ -42,6 +42,8 @@ from ftplan_ros.nodes.tasks import (
     pose_of_task_point,
     task_point,
 )
+from ftplan_ros.simulation.initial import default_initial_configuration
+from ftplan_ros.simulation.kinematic import Motion
 
 
 def test_time_path_keeps_the_speed_limit_and_strictly_increasing_times():

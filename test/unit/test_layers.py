@@ -3,9 +3,9 @@
 core/ is layered along the data flow (core/__init__.py draws the map): a subpackage imports
 only from the layers below it, never from one above, never from outside core/. Only the
 ROS adapters (nodes/, bringup.py, plan_client.py) may import rclpy; the logic they adapt
-(execution/) imports no message type either, and nothing of the adapters. The checks walk
-the files themselves, so that a module added in a new subpackage is checked too, and each
-asserts that it found something to check.
+(execution/, simulation/) imports no message type either, and nothing of the adapters. The
+checks walk the files themselves, so that a module added in a new subpackage is checked
+too, and each asserts that it found something to check.
 """
 
 import ast
@@ -32,7 +32,7 @@ CORE_LAYERS = {
 ROS_ADAPTERS = {'nodes', 'bringup', 'plan_client'}
 ROS_PACKAGES = {'rclpy', 'rosidl_runtime_py'}
 # The logic of the nodes, without ROS: what each may import of ftplan_ros besides itself.
-ROS_FREE_LOGIC = {'execution': {'core'}}
+ROS_FREE_LOGIC = {'execution': {'core'}, 'simulation': {'core', 'execution'}}
 
 
 def module_name(path: Path) -> str:
@@ -120,7 +120,7 @@ def test_the_logic_of_the_nodes_imports_no_ros_no_messages_and_no_adapter(packag
                 offenders.append(f'{module_name(path)} imports {imported}')
             elif top == 'ftplan_ros' and (imported.split('.') + [''])[1] not in allowed:
                 offenders.append(f'{module_name(path)} imports {imported} (outside {allowed})')
-    assert len(files) >= 8, f'found only {len(files)} modules in {package}/'
+    assert len(files) >= 5, f'found only {len(files)} modules in {package}/'
     assert not offenders, '\n'.join(offenders)
 
 
