@@ -32,7 +32,7 @@ from ftplan_ros.nodes.obstacles import (
     rpy_from_quaternion,
     shape_from_obstacle,
 )
-from ftplan_ros.nodes.planner import display_web
+from ftplan_ros.nodes.plan_markers import display_web
 from ftplan_ros.nodes.sim import task_scene
 from ftplan_ros.nodes.tasks import (
     bind_task_kind,

@@ -1,6 +1,6 @@
 """A plan from the planner's latched topics: θ_s, the nominal trajectory, S_F, the plan status.
 
-The planner publishes each plan on four latched topics (planner.py): its plan status on
+The planner publishes each plan on four latched topics (plan_results.py): its plan status on
 /ftplan/plan/info (plan_info.py: what the plan is for, the robot's digest among it), S_F,
 the nominal trajectory and θ_s, the last two stamped like the plan. They arrive in no set
 order, and S_F carries no stamp: it is the plan's when one of its paths is the
