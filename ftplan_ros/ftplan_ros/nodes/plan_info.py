@@ -37,6 +37,7 @@ from .obstacles import obstacle_set_key
 from .reporting import parse_vector
 
 PLANNER_STATUS = 'ftplan_planner: plan'
+INFOS_KEPT = 8  # plan statuses kept by PlanInfos: the latest plans'
 
 
 def join_names(names: Sequence[str]) -> str:
@@ -111,7 +112,7 @@ def read_plan_info(values: Mapping[str, str]) -> PlanInfo | None:
 class PlanInfos:
     """The plan infos of the latest plans, by stamp (the oldest are dropped)."""
 
-    def __init__(self, size: int = 8):
+    def __init__(self, size: int = INFOS_KEPT):
         self.size = size
         self._infos: OrderedDict[str, PlanInfo] = OrderedDict()
 
