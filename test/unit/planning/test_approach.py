@@ -1,4 +1,5 @@
-"""Approaches from where the arm stands (core/planning/approach.py): M_s^F, RRT-Connect, locks."""
+"""Approaches from where the arm stands (core/planning/approach.py): M_s^F, certified cells,
+RRT-Connect, locks."""
 
 from dataclasses import replace
 
@@ -88,17 +89,22 @@ def test_an_arc_holds_only_free_configurations_of_M_s_through_q():
 
 
 def test_a_joint_move_goes_round_the_disks_either_way_and_is_certified():
+    """Through the 64^3 grid's certified cells among disks; where the grid does not apply
+    (a box far away), by RRT-Connect."""
     scene = load_scene(SCENES / 'fig3a.yaml')
-    approaches = planner_for(scene)
+    boxed = replace(scene, obstacles=scene.obstacles + (
+        Obstacle('box', (-2.9, -2.9, 0.0), size=(0.1, 0.1, 0.1)),))
     q, target = np.zeros(3), np.array([2.867, -1.356, 0.933])
     straight = [np.stack([q, end]) for end in straight_move_ends(q, target, scene.robot.periodic)]
-    assert not any(approaches.certify(move) for move in straight)
-    found = approaches.joint_move(q, target)
-    assert found.route is Route.RRT_CONNECT and np.array_equal(found.path[0], q)
-    turns = (found.path[-1] - target) / (2 * np.pi)
-    assert np.allclose(turns, np.round(turns), atol=1e-9)      # the target, whole turns apart
-    checker = CollisionChecker(scene.robot, scene.obstacles)
-    assert checker.min_clearance(densify(found.path, 0.002)).min() > 0.0
+    for where, route in ((scene, Route.THROUGH_CELLS), (boxed, Route.RRT_CONNECT)):
+        approaches = planner_for(where)
+        assert not any(approaches.certify(move) for move in straight)
+        found = approaches.joint_move(q, target)
+        assert found.route is route and np.array_equal(found.path[0], q)
+        turns = (found.path[-1] - target) / (2 * np.pi)
+        assert np.allclose(turns, np.round(turns), atol=1e-9)      # the target, whole turns apart
+        checker = CollisionChecker(where.robot, where.obstacles)
+        assert checker.min_clearance(densify(found.path, 0.002)).min() > 0.0
 
 
 def test_the_certificate_refuses_a_sweep_through_a_disk_and_non_finite_paths():
@@ -154,7 +160,7 @@ def test_where_no_plan_starts_within_reach_the_approach_says_so_and_why():
     starts = preimage_samples(np.asarray(scene.robot.link_lengths, dtype=float),
                               np.asarray(scene.task.start, dtype=float), 200)
     starts = starts[checker.min_clearance(starts) > 0.0]
-    walls = FreeComponents(scene)
+    walls = FreeComponents.over(scene)
     within_reach = [theta for theta in starts if not walls.separated(q, theta)]
     assert len(within_reach) >= 5
     for theta in within_reach[::len(within_reach) // 5][:5]:

@@ -10,9 +10,11 @@ module plans those ordinary motions; none of them is failure-tolerant (issue 10)
   self-motion, the tool staying at x_s; `prefer_reachable` turns the arc into the hook
   with which `core.plan` searches them first.
 - `ApproachPlanner.approach`: a path from q to θ_s (plus whole turns of periodic
-  joints): along that arc, along M_s (`self_motion_path`), by a straight joint move, or
-  by an ordinary collision-free joint move planned with OMPL's RRT-Connect and its
-  simplifier, the joint limits as bounds and the clearance as validity.
+  joints): along that arc, along M_s (`self_motion_path`), by a straight joint move,
+  through the certified free cells of a joint grid (planar 3R arms among disks,
+  `free_components`), or by an ordinary collision-free joint move planned with OMPL's
+  RRT-Connect and its simplifier, the joint limits as bounds and the clearance as
+  validity.
 - `ApproachPlanner.path_to_goal`: with a joint locked where it stands, a configuration
   reaching the goal in its failure hyperplane (Newton from random seeds) and a path there
   in the remaining joints (straight or RRT-Connect).
@@ -79,6 +81,7 @@ class Route(StrEnum):
     ALONG_ARC = 'along M_s^F'
     SELF_MOTION = 'along M_s'
     STRAIGHT = 'by a straight joint move'
+    THROUGH_CELLS = 'through certified free cells of a joint grid'
     GIVEN = 'by the path given'
     RRT_CONNECT = 'by a joint move planned with RRT-Connect'
     NONE = 'no path'
@@ -219,8 +222,8 @@ class ApproachPlanner:
 
         Tried in order: q is θ_s already (within `arrival` [rad] per joint, a single
         point); along the arc of M_s^F through q (`reachable_arc`, or `arc` if given);
-        along M_s by continuation; straight joint moves (a periodic joint turning either
-        way); RRT-Connect. Only the first two keep the tool at x_s.
+        along M_s by continuation; then `joint_move`. Only the first two keep the tool at
+        x_s.
         """
         robot = self.robot
         q = np.asarray(q, dtype=float)
@@ -243,9 +246,10 @@ class ApproachPlanner:
                    locked: int | None = None) -> Approach:
         """Find a certified joint move from q to target (plus whole turns), `locked` held.
 
-        Straight moves first (periodic joints may turn either way), then RRT-Connect in
-        the other joints, `rrt_attempts` times, towards every end of those moves at once;
-        not where `free_components` proves that no joint move exists.
+        Straight moves first (periodic joints may turn either way), then with no joint
+        held through the certified cells of `free_components`, then RRT-Connect in the
+        other joints, `rrt_attempts` times, towards every end of those moves at once; not
+        where `free_components` proves that no joint move exists.
         """
         q = np.asarray(q, dtype=float)
         ends = straight_move_ends(q, np.asarray(target, dtype=float), self.robot.periodic,
@@ -254,15 +258,36 @@ class ApproachPlanner:
             path = np.vstack([q, end])
             if self.certify(path):
                 return Approach(path, Route.STRAIGHT)
-        free = [j for j in range(self.robot.n_joints) if j != locked]
         ends = [end for end in ends if self._valid(end)]
         if not ends:
             return Approach(None, Route.NONE, 'the target configuration collides')
-        if self.free_components is not None and all(
-                self.free_components.separated(q, end, locked) for end in ends):
+        walls = self.free_components
+        if walls is not None and locked is None:
+            found = self.through_cells(q, ends[0], walls)
+            if found.ok:
+                return found
+        if walls is not None and all(walls.separated(q, end, locked) for end in ends):
             return Approach(None, Route.NONE, 'no collision-free joint move exists (proved on '
                             f'a {GRID_CELLS}^3 joint grid: the two configurations lie in '
                             'different components of its possibly free cells)')
+        return self._rrt_move(q, ends, locked)
+
+    def through_cells(self, q: np.ndarray, target: np.ndarray,
+                      walls: FreeComponents) -> Approach:
+        """Find a certified path from q (n,) to target (plus whole turns) through `walls`' cells.
+
+        A chain of touching certified free cells (`FreeComponents.path`), certified again
+        as every path is.
+        """
+        path = walls.path(q, target)
+        if path is not None and self.certify(path):
+            return Approach(path, Route.THROUGH_CELLS)
+        return Approach(None, Route.NONE, 'no chain of certified free cells of the '
+                        f'{walls.lattice.cells}^3 joint grid joins them')
+
+    def _rrt_move(self, q: np.ndarray, ends: list[np.ndarray], locked: int | None) -> Approach:
+        """RRT-Connect from q towards `ends` (lifts of one target), `locked` held; certified."""
+        free = [j for j in range(self.robot.n_joints) if j != locked]
         for attempt in range(self.options.rrt_attempts):
             path = self._rrt_connect(q, ends, free)
             if path is not None and self.certify(path):
