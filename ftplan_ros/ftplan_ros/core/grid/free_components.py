@@ -14,33 +14,26 @@ two configurations of one component of the certified cells.
 
 The grid applies to planar 3R arms among disks (`cell_classes.supports`); the approach
 planner asks it before it searches with RRT-Connect.
-
-`tolerant_start_out_of_reach` asks the same of every start a failure-tolerant plan could
-have: when none lies in the arm's component, no plan can begin where the arm can get to.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from functools import cached_property
 
 import numpy as np
 
-from ..collision.certification import LARGEST_ANGLE
-from ..collision.checker import CollisionChecker
 from ..model.angles import wrap_steps
 from ..model.robot import Robot
 from ..model.scene import Obstacle, Scene
 from .cell_classes import CellClasses, classify_cells, supports
 from .components import Components, components, layer_components
 from .sheet_kernels import bfs, greedy_cuts
-from .tolerant_set import fits_goal_tolerance, tolerant_set
 
 # Cells per joint. The proof holds at any resolution; a finer grid proves more pairs
 # apart (narrower gaps), a coarser one is quicker: 64^3 classifies in 1-4 ms.
 GRID_CELLS = 64
-# Cells per joint of the grids `tolerant_start_out_of_reach` may try, coarse
+# Cells per joint of the grids `start_reach.tolerant_start_out_of_reach` may try, coarse
 # first: 64^3 takes about 10 ms, 128^3 (the recovery sheets' first grid) about 40, 256^3
 # about 0.3 s and 120 MB more, 384^3 about 0.9 s and 400 MB (a narrow gap may need it).
 PROOF_GRIDS = (64, 128, 256, 384)
@@ -152,43 +145,3 @@ def proof_grids(finest: int) -> tuple[int, ...]:
         raise ValueError(f'the finest proof grid must be one of {PROOF_GRIDS} cells per '
                          f'joint, got {finest}')
     return PROOF_GRIDS[:PROOF_GRIDS.index(finest) + 1]
-
-
-def tolerant_start_out_of_reach(scene: Scene, q: np.ndarray, margin: float = 0.0,
-                                grids: tuple[int, ...] = START_GRIDS) -> int | None:
-    """Return the cells per joint of a grid proving that no plan starts within q's reach.
-
-    q (n,) [rad] is where the arm stands, clear of the obstacles by more than `margin`
-    [m]; the grids of `grids` cells per joint are tried in turn (`_out_of_reach`). None
-    when none proves it, when they do not apply (not a planar 3R arm among disks, a goal
-    tolerance too fine for them), and for a q that is not finite, lies beyond
-    `LARGEST_ANGLE` or is not clear (an arm in collision reaches nothing: its approach
-    says why). Raises ValueError for a margin that is not finite and >= 0.
-    """
-    if not (math.isfinite(margin) and margin >= 0.0):
-        raise ValueError(f'margin must be a finite clearance >= 0 [m], got {margin}')
-    q = np.asarray(q, dtype=float).reshape(1, -1)
-    if scene.task is None or not supports(scene) or q.shape[1] != scene.robot.n_joints \
-            or not np.all(np.abs(q) <= LARGEST_ANGLE):  # False for NaN too
-        return None
-    if not CollisionChecker(scene.robot, scene.obstacles).min_clearance(q)[0] > margin:
-        return None
-    return next((cells for cells in grids if fits_goal_tolerance(scene, cells)
-                 and _out_of_reach(scene, q, margin, cells)), None)
-
-
-def _out_of_reach(scene: Scene, q: np.ndarray, margin: float, cells: int) -> bool:
-    """Whether a grid of `cells` per joint proves that no plan starts where q (1, 3) reaches.
-
-    A plan's θ_s lies in a possibly free cell that may meet G and may put the tool at the
-    task start (`TolerantSet`), and every path from q clear by more than `margin` [m]
-    stays in the component of possibly free cells holding q's cell: True when no such
-    cell lies in it. False for a q outside the joint limits.
-    """
-    grid = tolerant_set(scene, cells, margin=margin)
-    lattice = grid.lattice
-    if not np.all(lattice.inside(q)):
-        return False
-    found = components(grid.classes.possible, lattice.periodic)
-    mine = found.at(lattice.cell_of(q))[0]
-    return bool(mine > 0 and not found.holding(grid.liberal_all & grid.near_start)[mine])
