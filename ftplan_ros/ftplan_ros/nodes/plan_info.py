@@ -15,7 +15,8 @@ nodes that join late:
 | `tolerated_joints` | joint names, comma-separated (e.g. 'joint1,joint3') |
 | `robot` | a digest of the robot's model (core robot_digest): joints, limits, geometry |
 | `obstacles`, `obstacle_set` | how many obstacles, and a digest naming them (obstacles.py) |
-| `approach` | how the arm gets to θ_s from where it stood (core/approach.py) |
+| `approach` | how the arm gets to θ_s from where it stood (core/planning/approach.py) |
+| `reach`, `reach_search` | the answer for the arm where it stands; how far it looked |
 
 The executor reads them from /ftplan/plan/info to tell a plan for another robot, to
 judge arrival and to name an untolerated lock, and repeats `tolerated_joints` in its

@@ -34,11 +34,14 @@ planning starts, and its status names them (`obstacle_set`); when /robot_descrip
 replaces the robot while it plans, the request is refused: the plan would be for a
 robot that is gone.
 
-The arm where it stands (`approach`, default on): with a joint state, the planner prefers
-a θ_s the arm reaches from it along M_s^F (the end effector staying at x_s), else one a
-collision-free joint move reaches (core/approach.py), and publishes that approach, timed
-and stamped like the plan, on /ftplan/plan/approach (no points: none found, or no joint
+The arm where it stands (`approach`, default on): with a joint state, the planner serves
+only a plan whose θ_s the arm gets to (core/planning/reachable.py): preferably along
+M_s^F (the end effector staying at x_s), else by a certified joint move. It publishes that
+approach, timed and stamped like the plan, on /ftplan/plan/approach (no points: no joint
 state); the status says how it goes (`approach`). The approach is not failure-tolerant.
+Otherwise the Path is empty and the reason says "none reachable (proved)" or "none found
+within the search", and what plan exists elsewhere; the status says which (`reach`) and
+how far the search looked (`reach_search`).
 
 Requests wait in a queue of SERVICE_QUEUE_DEPTH (qos.py). With `plan_workers` = 0 they
 are planned one at a time in the node's process; with N >= 1, N at a time in N worker
@@ -78,7 +81,7 @@ from ftplan_ros.core import InputError, ManifoldCache, PlanResult, Scene, load_k
 from ftplan_ros.core.grid.free_components import PROOF_GRIDS, START_GRIDS
 from ftplan_ros.core.io.scene_file import parse_tolerated
 from ftplan_ros.core.model.robot import robot_digest
-from ftplan_ros.core.planning.approach import Approach
+from ftplan_ros.core.planning.reachable import ReachablePlan
 
 from .inputs import read_arm_state
 from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
@@ -171,16 +174,18 @@ class PlannerNode(Node):
                 'per core; 0: one request at a time in the node\'s process. Requests past '
                 'them wait in a queue.', read_only=True)
         declare(self, 'approach', True,
-                'Plan for the arm where it stands: prefer a theta_s reachable from the '
-                'latest joint state along M_s^F, else by a joint move, and publish the '
-                'approach on /ftplan/plan/approach.')
+                'Plan for the arm where it stands: serve only a plan whose theta_s the '
+                'latest joint state reaches (along M_s^F preferably, else by a certified '
+                'joint move) and publish the approach on /ftplan/plan/approach; else an '
+                'empty Path: none reachable (proved), or none found within the search.')
         declare(self, 'approach_time', 1.0,
                 'Budget [s] of each of the three RRT-Connect attempts of an approach.')
         declare(self, 'approach_proof_cells', START_GRIDS[-1],
-                'Cells per joint of the finest grid that may prove no failure-tolerant plan '
-                'starts within the arm\'s reach, when no approach is found (planar 3R arms '
-                f'among disks): one of {", ".join(map(str, PROOF_GRIDS))}; finer proves '
-                'narrower gaps but takes longer and more memory (384: about 1 s and 0.4 GB).')
+                'Cells per joint of the finest grid that searches the failure-tolerant starts '
+                'within the arm\'s reach, or proves there are none, when no approach is found '
+                f'(planar 3R arms among disks): one of {", ".join(map(str, PROOF_GRIDS))}; '
+                'finer decides narrower gaps but takes longer and more memory (384: about '
+                '1 s and 0.4 GB).')
         validators = {'max_joint_speed': positive, 'margin': non_negative,
                       'seed': non_negative, 'plan_timeout': positive,
                       'plan_workers': _check_plan_workers,
@@ -315,7 +320,7 @@ class PlannerNode(Node):
         values: dict[str, object] = {'stamp': stamp_key(stamp)}
         timeout = float(self.get_parameter('plan_timeout').value)
         try:
-            scene, result, approach = self._answer(request, values, timeout)
+            scene, result, reachable = self._answer(request, values, timeout)
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             reason, level = refusal(error, timeout)
             if level == 'ERROR':
@@ -323,9 +328,15 @@ class PlannerNode(Node):
             self._report_failure(reason, values, level)
             return response
         values['plan_time_s'] = result.stats.get('plan_time_s', float('nan'))
+        if reachable is not None:
+            values.update(reach=reachable.outcome.value, reach_search=reachable.searched)
         if not result.feasible:
             self._report_failure(f'no failure-tolerant plan: {result.reason}', values)
             return response
+        if reachable is not None and not reachable.ok:
+            self._report_failure(f'{reachable.outcome.value}: {reachable.reason}', values)
+            return response
+        approach = None if reachable is None else reachable.approach
         values.update(found_values(scene, result, approach))
         # The response first: the results and the report follow it (plan_results.py).
         self.results.publish(scene, result, approach, stamp, values)
@@ -334,7 +345,7 @@ class PlannerNode(Node):
         return response
 
     def _answer(self, request: GetPlan.Request, values: dict, timeout: float,
-                ) -> tuple[Scene, PlanResult, Approach | None]:
+                ) -> tuple[Scene, PlanResult, ReachablePlan | None]:
         """Read the request, plan it, check the robot stayed; raise on the way (refusal).
 
         `values` get the plan status's description of the request (plan_info.py).
@@ -342,12 +353,12 @@ class PlannerNode(Node):
         scene, q = self._request_scene(request)
         values.update(plan_info_values(scene.robot, scene.obstacles, scene.task, [
             scene.robot.joint_names[i] for i in scene.tolerated_joints]))
-        result, approach = self._plan(scene, q, timeout)
+        result, reachable = self._plan(scene, q, timeout)
         self._check_robot_kept(values['robot'])
-        return scene, result, approach
+        return scene, result, reachable
 
     def _plan(self, scene: Scene, q: np.ndarray | None, timeout: float,
-              ) -> tuple[PlanResult, Approach | None]:
+              ) -> tuple[PlanResult, ReachablePlan | None]:
         """Plan the request's scene; with q, for the arm standing there (plan_from).
 
         In a plan worker when there are any, else here. Raises PlanTimeout at the first
