@@ -105,8 +105,9 @@ def test_a_drill_of_a_7_joint_arm_through_the_bringup(processes, tmp_path):
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'
 
 
-def test_a_bad_png_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_path):
-    """Issue 10, row 11: both ran the whole suite first, then a traceback and exit 1."""
+def test_a_bad_png_or_record_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_path):
+    """Issue 10, row 11: both ran the whole suite first, then a traceback and exit 1.
+    Issue 37: a --record path is checked as --png is, and no file is left behind."""
     two = tmp_path / 'two_links.yaml'
     two.write_text('robot: {type: planar, link_lengths: [1.0, 1.0]}\n'
                    'task: {start: [1.5, 0.0], goal: [1.0, 0.5]}\n')
@@ -114,11 +115,16 @@ def test_a_bad_png_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_
                            '--png: writes PNG files: give a path ending in .png'),
                           (['--scene', FIG3A, '--png', tmp_path / 'none' / 'x.png'],
                            'does not exist'),
+                          (['--scene', FIG3A, '--record', tmp_path / 'run.bag'],
+                           '--record: writes MCAP files: give a path ending in .mcap'),
+                          (['--scene', FIG3A, '--record', tmp_path / 'none' / 'run.mcap'],
+                           '--record: the folder of'),
                           (['--scene', two], '2 joints give no redundancy')]:
         code, out, err = processes(BRINGUP + args).wait(timeout=120)
         assert code == 2, (args, out, err)
         assert problem in err and 'Traceback' not in err
         assert 'starting the planner' not in err                 # refused before any node
+    assert not (tmp_path / 'run.bag').exists()
 
 
 def test_where_no_plan_starts_within_the_arms_reach_the_bringup_says_so(processes):
