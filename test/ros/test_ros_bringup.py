@@ -10,6 +10,7 @@ from spatial_scenes import panda_scene
 from ftplan_ros.bringup import RunReport, summarize
 from ftplan_ros.core import load_scene
 from ftplan_ros.plan_client import Outcome, PlannedMotion
+from ftplan_ros.recording.bag_reader import open_bag
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
@@ -82,14 +83,19 @@ def test_bad_input_exits_2_with_one_line(processes):
     assert code == 2 and 'cannot read nonexistent.yaml (no such file)' in err
 
 
-def test_ctrl_c_shuts_every_node_down_cleanly(processes):
-    bringup = processes(BRINGUP + ['--scene', FIG3A, '--trials', '200', '--seed', '3'])
+def test_ctrl_c_shuts_every_node_down_cleanly_and_closes_the_recording(processes, tmp_path):
+    recording = tmp_path / 'run.mcap'
+    bringup = processes(BRINGUP + ['--scene', FIG3A, '--trials', '200', '--seed', '3',
+                                   '--record', recording])
     wait_for(lambda: 'run 1/200' in bringup.output()[1] or not bringup.alive(), timeout=300,
              what='the first run')
     code, out, err = bringup.interrupt()
     assert code == 130, out + err
     assert 'interrupted; shutting the nodes down' in err
     assert 'Traceback' not in err and 'exception' not in err.lower()
+    with open_bag(recording) as bag:  # complete, with its summary
+        assert bag.topic('/joint_states').count > 0
+        assert f'Messages:          {bag.message_count}' in bag.info()
 
 
 def test_a_drill_of_a_7_joint_arm_through_the_bringup(processes, tmp_path):

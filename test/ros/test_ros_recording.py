@@ -1,4 +1,4 @@
-"""Recordings through real nodes: the recorder node and `ftplan-bringup --record`.
+"""Recordings through real nodes: the recorder node, `ftplan-bringup --record`, `ftplan replay`.
 
 The files are read back with recording/bag_reader.py, whose decoding is mcap_ros2's (as
 Foxglove's): a schema that did not describe rclpy's CDR bytes would fail there.
@@ -13,21 +13,25 @@ import yaml
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point
+from matplotlib.image import imread
 from mcap_ros2._dynamic import generate_dynamic
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
-from ros_support import FIG3A, wait_for
+from ros_support import FIG3A, SCENES, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ftplan_msgs_py import create_joint_state
+from ftplan_ros.core import InputError, load_scene
+from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.recorder import Recording, subscription_qos
 from ftplan_ros.recording.bag_reader import open_bag
 from ftplan_ros.recording.bag_writer import BagWriter
 from ftplan_ros.recording.definitions import message_definition
+from ftplan_ros.recording.replay import recorded_runs, recorded_scene
 
 BIN = Path(sys.executable).parent
 # What a recorded bringup holds: every topic the suite publishes, with its type.
@@ -125,8 +129,10 @@ def plain(message, like):
     return ord(message) if isinstance(message, bytes) else message
 
 
-def test_a_recorded_drill_holds_every_topic_in_time_order(processes, tmp_path):
-    recording, live = tmp_path / 'run.mcap', tmp_path / 'live.png'
+def test_a_recorded_drill_holds_every_topic_in_time_order_and_replays_to_the_live_figure(
+        processes, tmp_path):
+    recording, live, replayed = tmp_path / 'run.mcap', tmp_path / 'live.png', \
+        tmp_path / 'replay.png'
     code, out, err = processes([BIN / 'ftplan-bringup', '--scene', FIG3A, '--drill',
                                 'joint2@0.4', '--record', recording, '--png', live]).wait(
         timeout=300)
@@ -154,3 +160,30 @@ def test_a_recorded_drill_holds_every_topic_in_time_order(processes, tmp_path):
     [markers] = [m.message for m in messages if m.topic == '/ftplan/plan/markers']
     assert sum(marker.ns == 'obstacles' for marker in markers.markers) == 3  # fig3a's disks
 
+    code, out, err = processes([BIN / 'ftplan', 'replay', recording, '--png',
+                                replayed]).wait(timeout=300)
+    assert code == 0, out + err
+    assert f'Messages:          {total}\n' in out
+    assert 'run 1: joint2@0.4, joint2 locked at 40.0% of the nominal path' in out
+    assert np.array_equal(imread(replayed), imread(live))  # one drawing, the same run
+    code, out, err = processes([BIN / 'ftplan', 'replay', recording, '--png', replayed,
+                                '--scene', SCENES / 'panda_shelf.yaml']).wait(timeout=300)
+    assert code == 2 and err.strip().splitlines() == [
+        f'ftplan: error: --scene: the robot of panda_shelf.yaml (digest '
+        f'{robot_digest(load_scene(SCENES / "panda_shelf.yaml").robot)}) is not the recorded '
+        f'one ({robot_digest(load_scene(FIG3A).robot)}): give the scene the run was recorded '
+        'with']
+
+
+def test_a_replay_needs_the_scene_the_recording_names_or_one_given(tmp_path):
+    BagWriter(tmp_path / 'anonymous.mcap').close()
+    BagWriter(tmp_path / 'moved.mcap', {'scene_file': str(tmp_path / 'gone.yaml')}).close()
+    with open_bag(tmp_path / 'anonymous.mcap') as bag, pytest.raises(
+            InputError, match='does not name the scene it recorded: give it with --scene'):
+        recorded_scene(bag)
+    with open_bag(tmp_path / 'moved.mcap') as bag:
+        with pytest.raises(InputError, match=r'--scene: the recorded scene file .*gone.yaml is '
+                           'not here: give the scene with --scene SCENE.yaml'):
+            recorded_scene(bag)
+        assert recorded_scene(bag, FIG3A).name == 'fig3a'  # no plan recorded: no digest
+        assert recorded_runs(bag, ['joint1', 'joint2', 'joint3']) == []
