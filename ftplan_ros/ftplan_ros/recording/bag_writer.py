@@ -136,10 +136,11 @@ class BagWriter:
     def _bag_metadata(self) -> dict:
         """Return the bag's metadata as rosbag2 serialises it (metadata.yaml, version 9)."""
         first = self._first or 0
-        duration = {'nanoseconds': (self._last or 0) - first}
+        duration = (self._last or 0) - first
         count = sum(topic.count for topic in self._topics.values())
         return {
-            'version': METADATA_VERSION, 'storage_identifier': 'mcap', 'duration': duration,
+            'version': METADATA_VERSION, 'storage_identifier': 'mcap',
+            'duration': {'nanoseconds': duration},
             'starting_time': {'nanoseconds_since_epoch': first}, 'message_count': count,
             'topics_with_message_count': [
                 {'topic_metadata': {'name': name, 'type': topic.type_name,
@@ -150,11 +151,20 @@ class BagWriter:
             'compression_format': '', 'compression_mode': '',
             'relative_file_paths': [self.path.name],
             'files': [{'path': self.path.name, 'starting_time':
-                       {'nanoseconds_since_epoch': first}, 'duration': duration,
+                       {'nanoseconds_since_epoch': first}, 'duration': {'nanoseconds': duration},
                        'message_count': count}],
             'custom_data': {}, 'ros_distro': ROS_DISTRO}
 
 
 def _dump(data) -> str:
-    """Return YAML in block style, keys in the given order (as yaml-cpp writes rosbag2's)."""
-    return yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
+    """Return YAML in block style, keys in the given order (as yaml-cpp writes rosbag2's).
+
+    A value that appears twice is written twice: the same object would become an anchor
+    and an alias, which yaml-cpp reads but rosbag2 never writes.
+    """
+    return yaml.dump(data, Dumper=_PlainDumper, sort_keys=False, default_flow_style=False)
+
+
+class _PlainDumper(yaml.SafeDumper):
+    def ignore_aliases(self, data) -> bool:
+        return True
