@@ -85,6 +85,31 @@ def test_the_recorder_writes_each_message_once_latched_ones_too_with_the_offered
     assert offered['/test/states'][0]['durability'] == 'volatile'
 
 
+class FullDisk(BagWriter):
+    """A recording whose file system fills up after the first message."""
+
+    def write(self, topic, data, publish_time=0):
+        if self.counts().get(topic):
+            raise OSError(28, 'No space left on device')
+        return super().write(topic, data, publish_time)
+
+
+def test_a_full_disk_stops_the_recording_with_one_error_and_counts_what_is_lost(
+        ros, tmp_path):
+    recording = Recording(FullDisk(tmp_path / 'run.mcap'), context=ros.context)
+    try:
+        ros.probe.advertise(JointState, '/test/states', 10)
+        for k in range(5):
+            ros.probe.publishers_['/test/states'].publish(create_joint_state(['a'], [k]))
+        # 4 joint states, and what comes after (the error's own line on /rosout)
+        wait_for(lambda: recording.node.lost >= 4, what='4 messages lost')
+        errors = wait_for(lambda: ros.probe.logged('ftplan_recorder', 'cannot write'))
+    finally:
+        counts = recording.stop()
+    assert counts['/test/states'] == 1 and len(errors) == 1
+    assert 'No space left on device; the messages from now on are lost' in errors[0]
+
+
 def test_the_recorder_asks_for_what_every_publisher_offers():
     """rosbag2's rule: reliable and transient-local only when every publisher offers it."""
     latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
