@@ -7,9 +7,11 @@
                  [--crowded-cells C] [--grid-baseline N]
                  [--json OUT.json]
     ftplan study SPEC.yaml --out DIR [--scheduler ADDRESS] [--workers N]
+    ftplan replay RECORDING.mcap [--png MOTION.png] [--scene SCENE.yaml]
 
 Exit codes: 0 done (for `plan`: a failure-tolerant plan exists), 1 no failure-tolerant
-plan (or a drill trial failed), 2 bad input (one line on stderr naming the field).
+plan (or a drill trial failed, or a recording without a run to draw), 2 bad input (one
+line on stderr naming the field; a file that is not a complete recording too).
 """
 
 from __future__ import annotations
@@ -108,6 +110,15 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument('--workers', type=int,
                        help='worker processes of the local cluster (default: one per CPU)')
     study.set_defaults(run=_study_command)
+
+    replay = commands.add_parser('replay', help='summarise a recording of ftplan-bringup '
+                                 '(as ros2 bag info does) and draw its run')
+    replay.add_argument('recording', type=Path, help='an MCAP file of ftplan-bringup --record')
+    replay.add_argument('--png', type=Path, help='draw the recorded run here, as the '
+                        'bringup\'s --png draws it live')
+    replay.add_argument('--scene', type=Path, help='the scene of the run (default: the scene '
+                        'file the recording names)')
+    replay.set_defaults(run=_replay_command)
     return parser
 
 
@@ -238,6 +249,27 @@ def _bench_command(args: argparse.Namespace) -> int:
 def _study_command(args: argparse.Namespace) -> int:
     from .study.command import run_study_command  # Dask loads for studies only
     return run_study_command(args.spec, args.out, args.scheduler, args.workers, Progress())
+
+
+def _replay_command(args: argparse.Namespace) -> int:
+    if args.png is not None and args.png.suffix.lower() != '.png':
+        raise InputError('--png', f'figures are PNG files: give a path ending in .png, not '
+                         f'{args.png}')
+    from .recording.bag_reader import open_bag  # ROS message readers load for replays only
+    from .recording.replay import describe_run, draw_recorded_run, recorded_runs, recorded_scene
+    with open_bag(args.recording) as bag:
+        print(bag.info())
+        if args.png is None:
+            return 0
+        scene = recorded_scene(bag, args.scene)
+        runs = recorded_runs(bag, list(scene.robot.joint_names))
+    print('\n'.join(describe_run(run) for run in runs) or 'no recorded run')
+    drawn = draw_recorded_run(scene, runs, args.png)
+    if drawn is None:
+        print(f'ftplan: no recorded run to draw in {args.png}', file=sys.stderr)
+        return 1
+    print(f'wrote {args.png} (run {drawn.run})')
+    return 0
 
 
 def _describe(scene, result) -> str:

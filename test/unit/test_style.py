@@ -31,6 +31,9 @@ def test_the_ros_free_packages_load_no_ros_module():
             package.__path__, package.__name__ + '.')]
     # The plan workers' fork server imports these: no ROS threads in the processes it forks.
     modules += [f'ftplan_ros.nodes.plan_{name}' for name in ('pool', 'worker', 'jobs')]
+    # A recording is written and read without ROS (only the recorder node subscribes).
+    modules += [f'ftplan_ros.recording.{name}' for name in ('definitions', 'bag_writer',
+                                                            'bag_reader')]
     code = ('import importlib, sys\n'
             f'for name in {modules!r}:\n'
             '    importlib.import_module(name)\n'
