@@ -139,7 +139,8 @@ class ObstacleSet:
         try:
             shapes = read_obstacle_markers(msg, self.base.frame_id, self.shapes)
         except ValueError as error:
-            self.lost = f'an obstacle update was refused ({error})'
+            refused = f'an obstacle update was refused ({error})'
+            self.lost = f'{self.lost}; {refused}' if self.lost else refused
             raise
         obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
         self.shapes, self.obstacles = shapes, obstacles

@@ -238,14 +238,15 @@ def test_bad_urdfs_give_one_line_naming_the_field(urdf_file, xml, tip, base, fie
     assert re.search(words, str(error.value)), str(error.value)
 
 
-def test_a_mimic_joint_off_the_chain_following_one_off_the_chain_is_accepted():
+def test_a_mimic_joint_off_the_chain_following_one_off_the_chain_is_accepted(urdf_file):
     """The two fingers of a gripper: both held still, so the coupling changes nothing."""
     xml = bot_urdf().replace(
         '<link name="finger">', '<link name="finger">\n  </link>\n  <joint name="finger2" '
         'type="prismatic"><parent link="hand"/><child link="finger_b"/><axis xyz="0 1 0"/>'
         '<limit lower="0" upper="0.04" effort="1" velocity="1"/><mimic joint="finger_joint"/>'
         '</joint>\n  <link name="finger_b">', 1)
-    chain = chain_from_urdf(xml, 'tcp')
+    path = urdf_file(xml)
+    chain = chain_from_urdf(xml, 'tcp', mesh_dirs=[str(path.parent)])
     assert chain.joint_names == ('spin', 'tilt', 'elbow', 'wrist')
 
 
