@@ -122,6 +122,60 @@ def write_binary_stl(path: Path, vertices: np.ndarray, faces: np.ndarray) -> Non
             out.write(struct.pack('<12fH', *normal, *a, *b, *c, 0))
 
 
+def write_obj(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """Write a triangle mesh as a Wavefront OBJ file (1-based face indices)."""
+    lines = [f'v {x:.17g} {y:.17g} {z:.17g}' for x, y, z in np.asarray(vertices, dtype=float)]
+    lines += [f'f {a + 1} {b + 1} {c + 1}' for a, b, c in faces]
+    path.write_text('# ftplan test mesh\n' + '\n'.join(lines) + '\n')
+
+
+def write_collada(path: Path, vertices: np.ndarray, faces: np.ndarray, unit: float = 1.0) -> None:
+    """Write a triangle mesh as a COLLADA file whose coordinates are in units of `unit` [m]."""
+    numbers = ' '.join(f'{v:.17g}' for v in (np.asarray(vertices, dtype=float) / unit).ravel())
+    indices = ' '.join(str(k) for k in np.asarray(faces).ravel())
+    path.write_text(f'''<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="unit" meter="{unit:g}"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="m"><mesh>
+    <source id="p"><float_array id="pa" count="{3 * len(vertices)}">{numbers}</float_array>
+      <technique_common><accessor source="#pa" count="{len(vertices)}" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="{len(faces)}"><input semantic="VERTEX" source="#v" offset="0"/>
+      <p>{indices}</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#m"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+''')
+
+
+def write_mesh(path: Path, vertices: np.ndarray, faces: np.ndarray) -> Path:
+    """Write a triangle mesh in the format its suffix names (.stl, .obj, .dae); return `path`."""
+    {'.stl': write_binary_stl, '.obj': write_obj, '.dae': write_collada}[path.suffix](
+        path, vertices, faces)
+    return path
+
+
+def convex_hull(points: int = 152, axes=(0.06, 0.04, 0.1)):
+    """A convex mesh of 2 * points - 4 triangles (300 for 152 points) [m], faces outward.
+
+    Its vertices lie on an ellipsoid of semi-axes `axes`, spread as a Fibonacci lattice.
+    """
+    from scipy.spatial import ConvexHull
+    k = np.arange(points) + 0.5
+    polar, azimuth = np.arccos(1.0 - 2.0 * k / points), np.pi * (1.0 + 5.0 ** 0.5) * k
+    vertices = np.stack([np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth),
+                         np.cos(polar)], axis=1) * np.asarray(axes)
+    faces = ConvexHull(vertices).simplices
+    corners = vertices[faces]
+    outward = np.einsum('ij,ij->i', np.cross(corners[:, 1] - corners[:, 0],
+                                             corners[:, 2] - corners[:, 0]), corners[:, 0]) > 0
+    return vertices, np.where(outward[:, None], faces, faces[:, ::-1])
+
+
 # A 4-joint arm with what URDFs have: a continuous joint, an axis not along x, y or z,
 # fixed joints folded in (a bracket with a sphere, the TCP), a finger on a prismatic joint
 # off the chain, and a link whose collision geometry is a mesh (scaled).

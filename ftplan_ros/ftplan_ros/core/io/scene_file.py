@@ -36,6 +36,7 @@ from ..model.urdf import chain_from_urdf
 from ..model.urdf_structure import read_urdf
 from ..validation import check_keys, mapping, nonnegative, number, sequence, vector
 from .files import load_yaml, read_text
+from .mesh_files import with_mesh_files
 
 # [rad] Widest joint limit: a joint that turns further has no limit (it wraps).
 LARGEST_JOINT_ANGLE = 2.0 * math.pi
@@ -156,19 +157,23 @@ def _planar_robot(data: Mapping) -> PlanarChain:
 
 def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
     check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
-                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf'))
+                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf', 'mesh_dirs'))
     texts = {}
     for key, kind in (('file', 'URDF'), ('srdf', 'SRDF')):
         if key in data:
             if not isinstance(data[key], str) or not data[key]:
                 raise InputError(f'robot.{key}', f'must be the path of an {kind} file')
             texts[key] = read_text(directory / data[key], f'robot.{key}')
-    path = directory / data['file']
+    mesh_dirs = []
+    for k, folder in enumerate(sequence(data.get('mesh_dirs', []), 'robot.mesh_dirs')):
+        if not isinstance(folder, str) or not folder:
+            raise InputError(f'robot.mesh_dirs[{k}]', 'must be the path of a folder')
+        mesh_dirs.append(directory / folder)
     return robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
                            data.get('tip_offset', [0.0, 0.0, 0.0]),
-                           data.get('disabled_collisions'),
-                           mesh_dirs=[str(path.parent), str(path.parent.parent)],
-                           srdf=texts.get('srdf')).model
+                           data.get('disabled_collisions'), mesh_dirs=mesh_dirs,
+                           srdf=texts.get('srdf'),
+                           directory=(directory / data['file']).parent).model
 
 
 def _dh_chain(data: Mapping) -> ChainModel:
@@ -192,14 +197,17 @@ def _dh_chain(data: Mapping) -> ChainModel:
 
 def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
                     tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
-                    disabled_collisions: Any = None, mesh_dirs: Sequence[str] = (),
-                    task_kind: str = 'pose', srdf: str | None = None) -> SpatialArm:
+                    disabled_collisions: Any = None, mesh_dirs: Sequence[str | Path] = (),
+                    task_kind: str = 'pose', srdf: str | None = None,
+                    directory: Path | None = None) -> SpatialArm:
     """Build the arm of a URDF given as text (e.g. /robot_description) for a kind of task.
 
     The arguments are those of a scene's `robot: {type: urdf, ...}` (InputError names
     them the same way); `srdf` is the text of an SRDF (e.g. /robot_description_semantic)
     whose exceptions replace the default ones (srdf.py). The exceptions come from one
-    place: an SRDF beside a `disabled_collisions` list is refused.
+    place: an SRDF beside a `disabled_collisions` list is refused. Meshes are found as
+    io/mesh_files.py says, from `directory` (the URDF file's folder; None for a URDF that
+    is no file) and `mesh_dirs`.
     """
     for key, value in (('tip_link', tip_link), ('base_link', base_link)):
         if value is not None and (not isinstance(value, str) or not value):
@@ -210,7 +218,8 @@ def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     offset = vector(list(tip_offset), 'robot.tip_offset', length=3)
     urdf = read_urdf(xml)
     exceptions = None if srdf is None else read_srdf(srdf, urdf.links)
-    model = chain_from_urdf(urdf, tip_link, base_link, offset, mesh_dirs=mesh_dirs)
+    urdf = with_mesh_files(urdf, directory, [Path(d) for d in mesh_dirs])
+    model = chain_from_urdf(urdf, tip_link, base_link, offset)
     if exceptions is not None:
         return SpatialArm(replace(model, disabled_pairs=chain_exceptions(model, exceptions)),
                           task_kind)
