@@ -11,6 +11,7 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+import yaml
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -258,6 +259,68 @@ def bot(urdf: Path, task_kind: str = 'position'):
     from ftplan_ros.core.io.scene_file import robot_from_urdf
     return robot_from_urdf(urdf.read_text(), 'tcp', tip_offset=BOT_TIP_OFFSET,
                            mesh_dirs=[str(urdf.parent)], task_kind=task_kind)
+
+
+# A 4-joint arm as a CAD export gives it: its links are cylinders, and `upper` and `fore`
+# meet end to end on the axes of `pitch` and `roll` (two links apart, the `knuckle` between
+# them). The joint sits 1 µm beyond the end of `upper` (the export's rounding): straight,
+# the two are that far apart; any turn of pitch or roll sinks the rim of `fore` into
+# `upper`, so every configuration but the straight one collides unless that pair is exempt.
+CAD_ARM_GAP = 1e-6  # [m]
+CAD_ARM = f'''<robot name="cad_arm">
+  <link name="base">
+    <collision><origin xyz="0 0 0.05"/>
+      <geometry><cylinder radius="0.08" length="0.1"/></geometry></collision>
+  </link>
+  <joint name="yaw" type="revolute">
+    <parent link="base"/><child link="upper"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 0 1"/><limit lower="-2.5" upper="2.5" effort="1" velocity="1"/>
+  </joint>
+  <link name="upper">
+    <collision><origin xyz="0.1 0 0.15"/>
+      <geometry><cylinder radius="0.05" length="0.3"/></geometry></collision>
+  </link>
+  <joint name="pitch" type="revolute">
+    <parent link="upper"/><child link="knuckle"/><origin xyz="0.1 0 {0.3 + CAD_ARM_GAP}"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="knuckle">
+    <collision><origin rpy="1.5707963267948966 0 0"/>
+      <geometry><cylinder radius="0.03" length="0.14"/></geometry></collision>
+  </link>
+  <joint name="roll" type="revolute">
+    <parent link="knuckle"/><child link="fore"/><origin xyz="0 0 0"/>
+    <axis xyz="1 0 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="fore">
+    <collision><origin xyz="0 0 0.15"/>
+      <geometry><cylinder radius="0.05" length="0.3"/></geometry></collision>
+  </link>
+  <joint name="wrist" type="revolute">
+    <parent link="fore"/><child link="hand"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="hand">
+    <collision><origin xyz="0 0 0.1"/>
+      <geometry><cylinder radius="0.04" length="0.2"/></geometry></collision>
+  </link>
+  <joint name="tip_joint" type="fixed">
+    <parent link="hand"/><child link="tip"/><origin xyz="0 0 0.2"/>
+  </joint>
+  <link name="tip"/>
+</robot>
+'''
+CAD_ARM_TASK = {'start': [0.45, 0.1, 0.55], 'goal': [0.35, -0.25, 0.45], 'goal_tolerance': 0.005}
+
+
+def write_cad_arm(directory: Path, **robot) -> Path:
+    """Write the CAD arm's URDF and a scene of it (a position task; `robot`: more keys)."""
+    (directory / 'cad_arm.urdf').write_text(CAD_ARM)
+    scene = {'robot': {'type': 'urdf', 'file': 'cad_arm.urdf', 'base_link': 'base',
+                       'tip_link': 'tip', **robot}, 'task': CAD_ARM_TASK}
+    path = directory / 'cad_arm.yaml'
+    path.write_text(yaml.safe_dump(scene))
+    return path
 
 
 def slice_distance(surface, joint, theta):
