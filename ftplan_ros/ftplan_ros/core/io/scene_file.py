@@ -29,7 +29,7 @@ from ..model.scene import (
     Task,
 )
 from ..model.spatial import SpatialArm
-from ..model.srdf import chain_exceptions, read_srdf
+from ..model.srdf import read_srdf, with_exceptions
 from ..model.task_space import unit_vector
 from ..model.urdf import chain_from_urdf
 from ..model.urdf_structure import read_urdf
@@ -230,8 +230,7 @@ def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     urdf = with_mesh_files(urdf, directory, [Path(d) for d in mesh_dirs])
     model = chain_from_urdf(urdf, tip_link, base_link, offset)
     if exceptions is not None:
-        return SpatialArm(replace(model, disabled_pairs=chain_exceptions(model, exceptions)),
-                          task_kind)
+        return SpatialArm(with_exceptions(model, exceptions), task_kind)
     return SpatialArm(with_disabled_collisions(model, disabled_collisions,
                                                self_collision_sampling), task_kind)
 
