@@ -154,13 +154,11 @@ def test_the_srdf_gives_the_exceptions_and_a_bad_one_keeps_the_last_good_robot(r
     assert planner.scene.robot.model.disabled_pairs is pairs
 
 
-def test_the_srdf_on_the_topic_exempts_the_pair_that_blocked_every_start(ros, tmp_path,
-                                                                         monkeypatch):
+def test_the_srdf_on_the_topic_exempts_the_pair_that_blocked_every_start(ros, tmp_path):
     """The CAD arm whose `upper` and `fore` touch in 91 % of random configurations: MoveIt's
     sampling keeps that pair checked, and the planner answers that it blocks every start
     and that the SRDF would exempt it; with the SRDF on /robot_description_semantic the
     same request is planned."""
-    monkeypatch.setenv('FTPLAN_CACHE_DIR', str(tmp_path / 'cache'))
     scene_file = tmp_path / 'no_robot.yaml'
     scene_file.write_text('obstacles: []\n')
     ros.make(PlannerNode, scene_file, base_link='base', tip_link='tip', task_kind='position')
