@@ -209,7 +209,8 @@ def with_mimic(follower: str, leader: str) -> str:
                  id='planar'),
     pytest.param(bot_urdf().replace('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>'), 'tcp', None,
                  'robot.file', "'elbow'.* axis", id='zero-axis'),
-    pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file', 'collision geometry',
+    pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file',
+                 "link 'l2': collision mesh 'missing.stl' was not found; looked in",
                  id='missing-mesh-file'),
     pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file', 'collision geometry',
                  id='garbage-mesh-file'),
@@ -284,3 +285,12 @@ def test_a_chain_of_one_joint_with_geometry_on_one_link_is_read():
     assert np.allclose(robot.model.axes, [[0.0, 0.0, 1.0]])
     assert robot.model.self_collision_pairs == ()
     assert np.allclose(robot.forward_kinematics(np.array([np.pi / 2])), [0.0, 0.5, 0.0])
+
+
+def test_limits_of_a_whole_turn_rounded_up_are_a_whole_turn():
+    """UR's URDFs write ±2π as ±6.28318530718, 4e-13 rad too wide: they were refused."""
+    robot = robot_from_urdf(ONE_JOINT.replace('lower="-1" upper="1"', 'lower="-6.28318530718" '
+                                              'upper="6.2832"'), 'tip', task_kind='position')
+    assert robot.limits[0].tolist() == [-2.0 * np.pi, 2.0 * np.pi]
+    with pytest.raises(InputError, match=r"^robot\.file: joint 'turn' has limits \[-6.3, 1.0\]"):
+        robot_from_urdf(ONE_JOINT.replace('lower="-1"', 'lower="-6.3"'), 'tip')

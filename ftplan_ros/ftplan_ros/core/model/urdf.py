@@ -6,8 +6,8 @@ URDF's root) to `tip_link`: its joints must be revolute or continuous. Joints of
 path (fingers, a second arm) are locked at zero with Pinocchio's `buildReducedModel`,
 which folds their links' geometry into the chain, and fixed joints are folded in the
 same way. Collision geometry is the links' `<collision>` elements: boxes, cylinders,
-spheres, capsules and meshes (loaded by Pinocchio; mesh paths are looked up next to the
-URDF and under `mesh_dirs`).
+spheres, capsules and meshes (STL, OBJ, COLLADA: loaded by Pinocchio, through coal and
+assimp, from the paths the URDF gives; core/io/mesh_files.py makes them absolute).
 """
 
 from __future__ import annotations
@@ -26,6 +26,9 @@ from .urdf_structure import UrdfDescription, read_urdf
 _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
                'JointModelRevoluteUnboundedUnaligned')
+# [rad] Limits written as ±2π rounded up (6.28318530718 in UR's URDFs, 6.2832) are ±2π:
+# the range narrows by this much at most, which keeps every plan within the true limits.
+TURN_ROUNDING = 1e-4
 _PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
 # Joints of a chain: redundant arms have 7 or 8; the cost of building a chain (its
 # self-collision pairs) grows with the square of its links.
@@ -34,10 +37,11 @@ MAX_CHAIN_JOINTS = 32
 
 def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str | None = None,
                     tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
-                    mesh_dirs: Sequence[str] = (), where: str = 'robot') -> ChainModel:
+                    where: str = 'robot') -> ChainModel:
     """Build the chain base_link → tip_link of a URDF; tool at `tip_offset` [m].
 
-    `urdf` is the URDF's text, or what `read_urdf` made of it. `tip_offset` is in the tip
+    `urdf` is the URDF's text, or what `read_urdf` made of it; its mesh filenames are
+    read as paths (relative ones from the working directory). `tip_offset` is in the tip
     link's frame. Bad input raises InputError naming `<where>.file`, `<where>.base_link`
     or `<where>.tip_link`.
     """
@@ -74,8 +78,7 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     _refuse_coupled_joints(urdf.mimics, {model.names[j] for j in path}, base_link, tip_link,
                            where)
     try:
-        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION,
-                                               package_dirs=list(mesh_dirs))
+        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
     except (ValueError, RuntimeError) as error:
         raise InputError(f'{where}.file', f'cannot load its collision geometry: '
                          f'{_one_line(error)}') from None
@@ -120,11 +123,12 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
         else:
             k = model.joints[j].idx_q
             low, high = float(model.lowerPositionLimit[k]), float(model.upperPositionLimit[k])
-            if not (-2.0 * np.pi <= low < high <= 2.0 * np.pi):
+            widest = 2.0 * np.pi + TURN_ROUNDING
+            if not (-widest <= low < high <= widest):
                 raise InputError(f'{where}.file', f'joint {model.names[j]!r} has limits '
                                  f'[{low}, {high}]: a revolute joint\'s must be an interval '
                                  'within ±2π [rad] (make it continuous to turn without limit)')
-            limits.append((low, high))
+            limits.append((max(low, -2.0 * np.pi), min(high, 2.0 * np.pi)))
     shapes = []
     for item in geometry.geometryObjects:
         placement = item.placement.homogeneous
