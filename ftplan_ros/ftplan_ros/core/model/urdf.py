@@ -64,6 +64,25 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     if not path:
         raise InputError(f'{where}.tip_link', f'no joint moves {tip_link!r} relative to '
                          f'{base_link!r}')
+    _check_chain_joints(model, path, urdf.mimics, base_link, tip_link, where)
+    try:
+        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
+    except (ValueError, RuntimeError) as error:
+        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
+                         f'{_one_line(error)}') from None
+    if not any(item.parentJoint in path for item in geometry.geometryObjects):
+        raise InputError(f'{where}.file', f'no link that the joints {base_link!r} -> '
+                         f'{tip_link!r} move has <collision> geometry: ftplan checks the '
+                         'links\' collision shapes against obstacles and each other; give '
+                         'them <collision> elements')
+    model, geometry = _hold_joints_off_the_chain(model, geometry, path, where)
+    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
+                  where)
+
+
+def _check_chain_joints(model: pin.Model, path: list[int], mimics: Sequence[tuple[str, str]],
+                        base_link: str, tip_link: str, where: str) -> None:
+    """Raise InputError unless the chain is short, revolute or continuous, and uncoupled."""
     if len(path) > MAX_CHAIN_JOINTS:
         raise InputError(f'{where}.tip_link', f'{len(path)} joints move {tip_link!r} relative '
                          f'to {base_link!r}: ftplan plans for chains of at most '
@@ -75,18 +94,23 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
             raise InputError(f'{where}.file', f'joint {model.names[joint]!r} between '
                              f'{base_link!r} and {tip_link!r} is {what} ({kind}): only '
                              'revolute and continuous joints are supported')
-    _refuse_coupled_joints(urdf.mimics, {model.names[j] for j in path}, base_link, tip_link,
-                           where)
-    try:
-        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
-    except (ValueError, RuntimeError) as error:
-        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
-                         f'{_one_line(error)}') from None
+    _refuse_coupled_joints(mimics, {model.names[j] for j in path}, base_link, tip_link, where)
+
+
+def _hold_joints_off_the_chain(model: pin.Model, geometry: pin.GeometryModel, path: list[int],
+                               where: str) -> tuple[pin.Model, pin.GeometryModel]:
+    """Lock the joints off the chain at zero (Pinocchio's buildReducedModel)."""
     locked = [j for j in range(1, model.njoints) if j not in path]
-    if locked:
-        model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
-    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
-                  where)
+    if not locked:
+        return model, geometry
+    try:
+        return pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
+    except (ValueError, RuntimeError) as error:
+        bodies = {frame.name for frame in model.frames if frame.type == pin.FrameType.BODY}
+        clash = sorted(bodies & set(model.names[1:]))
+        hint = f'; link {clash[0]!r} has the name of a joint: rename one' if clash else ''
+        raise InputError(f'{where}.file', f'cannot hold the joints off the chain still: '
+                         f'{_one_line(error)}{hint}') from None
 
 
 def _refuse_coupled_joints(mimics: Sequence[tuple[str, str]], chain: set[str], base_link: str,
