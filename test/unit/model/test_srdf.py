@@ -165,3 +165,13 @@ def test_any_srdf_text_is_exceptions_or_an_input_error_and_exempts_only_whole_pa
         whole = all(exceptions.exempts(s.urdf_link, t.urdf_link) for s in model.shapes
                     for t in model.shapes if (s.link, t.link) == (a, b))
         assert ((a, b) in exempt) == whole
+
+
+def test_an_srdf_written_for_another_robot_is_refused():
+    """Review of issue 34 on vendor models: cassie_v2.srdf (robot 'cassie', no entries)
+    given with the Panda's URDF was taken as the Panda's, so every pair was checked and
+    the planner blamed obstacles in a scene that had none."""
+    with pytest.raises(InputError, match=r"robot\.srdf: is written for robot 'cassie', the "
+                       r"URDF describes 'panda': give the SRDF of this robot"):
+        robot_from_urdf(PANDA_URDF.read_text(), 'panda_hand_tcp', 'panda_link0',
+                        srdf='<robot name="cassie"><group name="legs"/></robot>')

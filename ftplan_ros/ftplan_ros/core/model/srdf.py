@@ -49,15 +49,19 @@ class CollisionExceptions:
 
 
 def read_srdf(text: str, links: Collection[str], where: str = 'robot.srdf',
-              ) -> CollisionExceptions:
-    """Read an SRDF's collision entries, checked against the URDF's `links`.
+              robot_name: str | None = None) -> CollisionExceptions:
+    """Read an SRDF's collision entries, checked against the URDF's `links` and name.
 
-    InputError `where` names the entry and the link that is wrong.
+    InputError `where` names the entry and the link that is wrong, or the robot: as
+    MoveIt, an SRDF whose <robot name> is not the URDF's `robot_name` is refused.
     """
     root = parse_description(text, where, MAX_SRDF_BYTES)
     if root.tag != 'robot':
         raise InputError(where, f'is not an SRDF: it is a <{root.tag}> element, an SRDF one '
                          '<robot>')
+    if robot_name is not None and root.get('name') != robot_name:
+        raise InputError(where, f'is written for robot {root.get("name")!r}, the URDF '
+                         f'describes {robot_name!r}: give the SRDF of this robot')
     tags = ('disable_collisions', 'enable_collisions', 'disable_default_collisions')
     entries = [element for element in root if element.tag in tags]
     if len(entries) > MAX_SRDF_ENTRIES:
