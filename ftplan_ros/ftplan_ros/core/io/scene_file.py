@@ -229,6 +229,11 @@ def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     exceptions = None if srdf is None else read_srdf(srdf, urdf.links, robot_name=urdf.name)
     urdf = with_mesh_files(urdf, directory, [Path(d) for d in mesh_dirs])
     model = chain_from_urdf(urdf, tip_link, base_link, offset)
+    if not any(item.link >= 1 for item in model.shapes):
+        raise InputError('robot.file', f'no link that the joints {model.link_names[0]!r} -> '
+                         f'{tip_link!r} move has <collision> geometry: ftplan checks the '
+                         'links\' collision shapes against obstacles and each other; give '
+                         'them <collision> elements')
     if exceptions is not None:
         return SpatialArm(with_exceptions(model, exceptions), task_kind)
     return SpatialArm(with_disabled_collisions(model, disabled_collisions,

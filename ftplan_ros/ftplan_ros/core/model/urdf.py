@@ -70,11 +70,6 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     except (ValueError, RuntimeError) as error:
         raise InputError(f'{where}.file', f'cannot load its collision geometry: '
                          f'{_one_line(error)}') from None
-    if not any(item.parentJoint in path for item in geometry.geometryObjects):
-        raise InputError(f'{where}.file', f'no link that the joints {base_link!r} -> '
-                         f'{tip_link!r} move has <collision> geometry: ftplan checks the '
-                         'links\' collision shapes against obstacles and each other; give '
-                         'them <collision> elements')
     model, geometry = _hold_joints_off_the_chain(model, geometry, path, where)
     return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
                   where)
