@@ -1,9 +1,22 @@
-"""The paper's surface search (core/planning/surface_search.py): fail-closed screens, fans."""
+"""The paper's surface search (core/planning/surface_search.py): fail-closed screens, fans,
+joints held still."""
 
 import numpy as np
 import pytest
+from ftplan_testing import SCENES
 
-from ftplan_ros.core import CollisionChecker, ManifoldCache, PlannerOptions
+from ftplan_ros.core import (
+    CollisionChecker,
+    FailureSurface,
+    ManifoldCache,
+    PlannerOptions,
+    load_scene,
+    plan,
+    task_errors,
+)
+from ftplan_ros.core.model.paths import densify
+from ftplan_ros.core.paper.verification import verify_surface
+from ftplan_ros.core.planning.drill import run_drill
 from ftplan_ros.core.planning.surface_search import SurfaceSearch, straight_fans
 
 
@@ -50,3 +63,53 @@ def test_ranking_fans_are_the_points_along_each_straight_path(n):
     steps = np.arange(1, 9)[None, :, None, None] / 8
     expected = starts[:, None, None, :] + steps * (goals[:, None] - starts[:, None, None, :])
     assert np.array_equal(straight_fans(starts, goals, 8), expected)
+
+
+@pytest.fixture(scope='module')
+def held_elbow():
+    """The iiwa on a pose task that keeps the shoulder-wrist distance, every joint tolerated."""
+    scene = load_scene(SCENES / 'iiwa_free_pose_held.yaml')
+    return scene, plan(scene)
+
+
+def test_an_elbow_with_one_angle_on_both_manifolds_is_held_still(held_elbow):
+    scene, result = held_elbow
+    assert result.feasible, result.reason
+    assert result.tolerated_joints == tuple(range(7))
+    assert result.stats['held_joints'] == ['iiwa_joint_4']
+    surface = result.surface
+    assert np.all(surface.paths[..., 3] == result.theta_s[3])  # the whole web, exactly
+    assert surface.hit_paths[surface.tolerated.index(3)] == surface.nominal
+
+
+def test_the_rest_of_the_nominal_path_recovers_every_lock_of_the_held_joint(held_elbow):
+    """Brute force: densely sampled, the nominal path with the elbow fixed is clear and
+    ends at the goal, so from every point of it the lock needs nothing more."""
+    scene, result = held_elbow
+    path = densify(result.nominal_path, 0.002)
+    assert np.all(path[:, 3] == result.theta_s[3])
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    assert checker.min_clearance(path, 0.0).min() > 0.0
+    assert scene.task.reached(task_errors(scene.robot, scene.task.goal, path[-1]))
+
+
+def test_every_joints_lock_recovers_on_the_held_elbows_plan(held_elbow):
+    """The drill, as brute force: locks of every joint at random moments recover."""
+    scene, result = held_elbow
+    trials = run_drill(scene, result, 300, np.random.default_rng(3))
+    assert {t.joint for t in trials} == set(range(7))
+    assert all(t.ok for t in trials), [t for t in trials if not t.ok][:1]
+
+
+def test_a_web_that_moves_the_held_joint_fails_its_check(held_elbow):
+    """The certificate covers the held joint as any other: nudge its angle at one nominal
+    waypoint and the self-check refuses the web."""
+    scene, result = held_elbow
+    surface = result.surface
+    paths = np.array(surface.paths)
+    paths[surface.nominal, paths.shape[1] // 2, 3] += 1e-3
+    tampered = FailureSurface(paths, surface.nominal, surface.hit_paths, surface.tolerated)
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    verdict = verify_surface(tampered, checker, scene.task)
+    assert not verdict.ok
+    assert 'θ_4' in verdict.reason or 'joint 4' in verdict.reason, verdict.reason

@@ -36,6 +36,7 @@ from ..paper.failure_surface import (
     lift_goal_arc,
     smallest_windows,
 )
+from ..paper.held_joints import held_joints, same_angle
 from ..paper.manifolds import (
     ManifoldCache,
     SelfMotionManifold,
@@ -119,6 +120,10 @@ class SurfaceSearch:
         self.report = report
         self.cache = cache
         self.joints = scene.tolerated_joints
+        # Tolerated joints held still over the web (held_joints.py) and the others, whose
+        # failure planes cross M_g^F; set once the manifolds are traced.
+        self.held: tuple[int, ...] = ()
+        self.moving = self.joints
         self.margin = options.verification.margin
         self.checker = checker or CollisionChecker(self.robot, scene.obstacles)
         self.prefer_starts = prefer_starts
@@ -134,9 +139,12 @@ class SurfaceSearch:
         `options.candidate_refinement`.
         """
         M_s, M_g = self.manifolds()
+        self._hold_still(M_s, M_g)
         arcs = goal_free_arcs(M_g, self.margin)
         stats: dict = {'criterion': CRITERION, 'start_branches': len(M_s),
                        'goal_branches': len(M_g), 'goal_free_arcs': len(arcs)}
+        if self.held:
+            stats['held_joints'] = [self.robot.joint_names[j] for j in self.held]
         arc_points = [M_g[arc.branch].arc_points(arc.first, arc.count) for arc in arcs]
         arc_laps = [arc.lap for arc in arcs]
         # Candidates one step apart along M_s and, when that finds nothing, between them
@@ -178,6 +186,19 @@ class SurfaceSearch:
                                    for b in branches))
         return manifolds[0], manifolds[1]
 
+    def _hold_still(self, M_s: tuple[SelfMotionManifold, ...],
+                    M_g: tuple[SelfMotionManifold, ...]) -> None:
+        """Split the tolerated joints into those held still and those that move.
+
+        A joint is held when its angle is one value along every branch of M_s and M_g
+        (held_joints.py) and some other tolerated joint moves: the web of those is what
+        carries the plan.
+        """
+        held = held_joints(M_s, M_g, self.joints)
+        if len(held) < len(self.joints):
+            self.held = held
+            self.moving = tuple(j for j in self.joints if j not in held)
+
     def _search_preferred(self, candidates: np.ndarray, arc_points: list[np.ndarray],
                           arc_laps: list[int]) -> _Search:
         """Run `_search` on the candidates `prefer_starts` marks, then on all of them."""
@@ -203,7 +224,7 @@ class SurfaceSearch:
             return _Search(None, 'every goal configuration collides (M_g^F is empty)')
 
         # Step 3: the necessary condition, on M_g^F as a whole (the paper's Θ_s) and per arc.
-        per_arc = np.stack([necessary_condition(self.robot, candidates, points, self.joints)
+        per_arc = np.stack([self._necessary_condition(candidates, points)
                             for points in arc_points])  # (arcs, C, J)
         necessary_starts = candidates[per_arc.any(axis=0).all(axis=1)]
         single_arc = per_arc.all(axis=2)  # (arcs, C)
@@ -232,6 +253,19 @@ class SurfaceSearch:
             return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
                            'at one of its vertices', stats, necessary_starts, proposed)
         return self._verify_best(candidates, arc_points, ranking, stats, necessary_starts, proposed)
+
+    def _necessary_condition(self, candidates: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Test eq. 6 on one free arc (a, n): (C, J) bool over the tolerated joints.
+
+        A moving joint's failure plane must cross the arc; a held joint's must hold it.
+        """
+        passing = np.empty((len(candidates), len(self.joints)), dtype=bool)
+        moving = [self.joints.index(j) for j in self.moving]
+        passing[:, moving] = necessary_condition(self.robot, candidates, points, self.moving)
+        for j in self.held:
+            passing[:, self.joints.index(j)] = same_angle(candidates, points, j,
+                                                          bool(self.robot.periodic[j]))
+        return passing
 
     def _verify_best(self, candidates: np.ndarray, arc_points: list[np.ndarray],
                      ranking: _Ranking, stats: dict, necessary_starts: np.ndarray,
@@ -320,13 +354,13 @@ class SurfaceSearch:
         for a, points in enumerate(arc_points):
             members = np.flatnonzero(single_arc[a])
             crossings = [chord_crossings(self.robot, candidates[members], points, i)
-                         for i in self.joints]
+                         for i in self.moving]
             slots, spans, chosen = smallest_windows(
                 np.concatenate([which for which, _, _ in crossings]),
                 np.concatenate([np.full(len(which), k) for k, (which, _, _) in
                                 enumerate(crossings)]),
                 np.concatenate([positions for _, positions, _ in crossings]),
-                len(members), len(self.joints), arc_laps[a])
+                len(members), len(self.moving), arc_laps[a])
             fans.append(np.concatenate([thetas for _, _, thetas in crossings])[chosen])
             owners.append(members[slots])
             arcs.append(np.full(len(slots), a))
@@ -336,7 +370,7 @@ class SurfaceSearch:
         if not len(owners):
             return _Ranking(np.zeros(0), owners, arcs, np.zeros((0, 2)))
         fans = _coarse_fans(candidates, arc_points, owners, arcs, windows, np.concatenate(fans),
-                            self.joints, self.robot.periodic, self.options.coarse_waypoints)
+                            self.moving, self.robot.periodic, self.options.coarse_waypoints)
         clearance = self.checker.min_clearance(fans.reshape(-1, fans.shape[-1]),
                                                self.margin + _RANKING_CLEARANCE,
                                                refine=False).reshape(len(fans), -1).min(axis=1)
@@ -347,7 +381,7 @@ class SurfaceSearch:
     def _fine_surface(self, theta_s: np.ndarray, arc_points: np.ndarray,
                       window: tuple[float, float]) -> FailureSurface | None:
         """Build the web to verify: exact hits, full resolution, the clearest nominal path."""
-        hits = failure_plane_hits(self.robot, self.x_g, theta_s, arc_points, self.joints)
+        hits = failure_plane_hits(self.robot, self.x_g, theta_s, arc_points, self.moving)
         inside = [[h for h in joint_hits if window[0] - 1 <= h.position <= window[1] + 1]
                   for joint_hits in hits]
         if not all(inside):
@@ -356,9 +390,9 @@ class SurfaceSearch:
                   max(h.position for hs in inside for h in hs))
         chosen = choose_hits(inside, window)
         lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, chosen, self.robot.periodic)
-        surface = build_failure_surface(theta_s, lifted, lifted_hits, window,
-                                        self.options.column_spacing,
-                                        self.options.waypoint_spacing)
+        surface = self._hold(build_failure_surface(theta_s, lifted, lifted_hits, window,
+                                                   self.options.column_spacing,
+                                                   self.options.waypoint_spacing))
         clearance = self.checker.min_clearance(surface.vertices, self.margin).reshape(
             surface.paths.shape[:2])
         if not clearance.min() > self.margin:  # or NaN
@@ -366,7 +400,22 @@ class SurfaceSearch:
         # Nominal path: the clearest, and among equally clear ones the shortest.
         lengths = np.linalg.norm(surface.goal_points - theta_s, axis=1)
         nominal = int(np.lexsort((lengths, -clearance.min(axis=1)))[0])
-        return replace(surface, nominal=nominal)
+        hit_of = dict(zip(surface.tolerated, surface.hit_paths, strict=True))
+        return FailureSurface(surface.paths, nominal,
+                              tuple(hit_of.get(j, nominal) for j in self.joints), self.joints)
+
+    def _hold(self, surface: FailureSurface) -> FailureSurface:
+        """Return the web with every held joint at its θ_s value exactly (held_joints.py).
+
+        Its goal points had that value to within the rounding of Newton's method (their
+        task errors are checked again with the web).
+        """
+        if not self.held:
+            return surface
+        paths = np.array(surface.paths)
+        held = list(self.held)
+        paths[..., held] = surface.theta_s[held]
+        return replace(surface, paths=paths)
 
 
 def _blocking_joints(passing: np.ndarray, joints: tuple[int, ...]) -> list[list[int]]:
