@@ -22,7 +22,7 @@ class PlannerOptions:
     coarse_waypoints: int = 8         # waypoints of each path of the ranking fans
     max_verifications: int = 40       # surfaces verified at most
     candidate_refinement: int = 4     # start candidates per manifold step on the retry
-    curves: int = 6                   # redundancy >= 2: curves on the manifolds tried at most
+    curves: int = 48                  # redundancy >= 2: curves on the manifolds examined at most
     curve_samples: int = 64           # redundancy >= 2: inverse-kinematics samples per task point
     # The methods tried in turn: the paper's surface always, then where it finds no plan
     # recovery sheets over the failure-tolerant set on a joint grid (planar 3R arms among

@@ -124,6 +124,7 @@ class SurfaceSearch:
         # failure planes cross M_g^F; set once the manifolds are traced.
         self.held: tuple[int, ...] = ()
         self.moving = self.joints
+        self._manifolds: tuple | None = None
         self.margin = options.verification.margin
         self.checker = checker or CollisionChecker(self.robot, scene.obstacles)
         self.prefer_starts = prefer_starts
@@ -173,8 +174,30 @@ class SurfaceSearch:
                           self.robot.periodic, goal_free_arcs=len(arcs), blocked_joints=blocked,
                           start_preferred=search.start_preferred)
 
+    def count_feasible_starts(self, start_configuration: np.ndarray | None = None) -> int:
+        """Run Steps 1-3 alone: how many start candidates pass eq. 6 on one free arc of M_g^F.
+
+        Candidates as `run`'s first round (or the given start alone). The curves of
+        redundancy r >= 2 are ranked by it (curves.py).
+        """
+        M_s, M_g = self.manifolds()
+        self._hold_still(M_s, M_g)
+        candidates = self._start_candidates(M_s, 1) if start_configuration is None \
+            else self._given_start(start_configuration)
+        passing = np.zeros(len(candidates), dtype=bool)
+        for arc in goal_free_arcs(M_g, self.margin):
+            points = M_g[arc.branch].arc_points(arc.first, arc.count)
+            passing |= self._necessary_condition(candidates, points).all(axis=1)
+        return int(passing.sum())
+
     def manifolds(self) -> tuple[tuple[SelfMotionManifold, ...], tuple[SelfMotionManifold, ...]]:
-        """Trace M_s and M_g with the clearance of their points (Steps 1-2)."""
+        """Trace M_s and M_g with the clearance of their points (Steps 1-2), once per search."""
+        if self._manifolds is None:
+            self._manifolds = self._trace_manifolds()
+        return self._manifolds
+
+    def _trace_manifolds(self):
+        """Trace the branches of M_s and M_g and mark their obstacle-free points."""
         self.report('tracing self-motion manifolds')
         manifolds = []
         for name, x in (('task.start', self.x_s), ('task.goal', self.x_g)):
