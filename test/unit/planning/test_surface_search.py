@@ -113,3 +113,15 @@ def test_a_web_that_moves_the_held_joint_fails_its_check(held_elbow):
     verdict = verify_surface(tampered, checker, scene.task)
     assert not verdict.ok
     assert 'θ_4' in verdict.reason or 'joint 4' in verdict.reason, verdict.reason
+
+
+def test_a_search_for_other_joints_shares_the_traced_manifolds(fig3a):
+    """The coverage search (planner.py) plans for fewer joints on the same manifolds."""
+    scene, _ = fig3a
+    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(0),
+                           lambda line: None, ManifoldCache())
+    traced = search.manifolds()
+    other = search.for_joints([scene.robot.joint_names[2]])
+    assert other.manifolds() is traced
+    assert other.joints == (2,) and other.checker is search.checker
+    assert other.run().tolerated_joints == (2,)

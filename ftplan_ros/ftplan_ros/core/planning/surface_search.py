@@ -174,6 +174,17 @@ class SurfaceSearch:
                           self.robot.periodic, goal_free_arcs=len(arcs), blocked_joints=blocked,
                           start_preferred=search.start_preferred)
 
+    def for_joints(self, names: list[str]) -> SurfaceSearch:
+        """Return a search of the same task tolerating the named joints.
+
+        It shares this search's checker and, once traced, its manifolds with their
+        clearances (the task and the obstacles are the same).
+        """
+        other = SurfaceSearch(self.scene.with_tolerated(names), self.options, self.rng,
+                              self.report, self.cache, self.checker)
+        other._manifolds = self._manifolds
+        return other
+
     def count_feasible_starts(self, start_configuration: np.ndarray | None = None) -> int:
         """Run Steps 1-3 alone: how many start candidates pass eq. 6 on one free arc of M_g^F.
 
