@@ -9,6 +9,7 @@ from ftplan_ros.core.io.scene_file import parse_scene
 from ftplan_ros.core.model.robot import task_errors, task_residuals
 from ftplan_ros.core.model.scene import Scene, Task
 from ftplan_ros.core.planning.curves import CurveSearch, FrozenJoints
+from ftplan_ros.core.planning.drill import run_drill
 
 FROZEN = ((1, 4), (0.3, -0.5))  # panda_joint2 and panda_joint5 held at these angles [rad]
 
@@ -141,3 +142,17 @@ def test_no_is_said_only_after_the_whole_budget_of_curves():
     assert 'no plan on the 30 curves examined' in result.reason
     values = {candidate[1] for candidate in search.examined_candidates}
     assert len(values) == 30  # fresh samples, no curve examined twice
+
+
+@pytest.mark.parametrize('name', ['ur5e_free_position', 'jaco2_free_position'])
+def test_six_joint_arms_plan_position_tasks_tolerating_every_joint(name):
+    """Redundancy 3: two joints frozen (the last, which moves the tool point not at all,
+    among them), every joint's lock recovered in a drill."""
+    scene = load_scene(SCENES / f'{name}.yaml')
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.tolerated_joints == tuple(range(6))
+    frozen = result.stats['curve']['frozen_joints']
+    assert len(frozen) == 2 and scene.robot.joint_names[5] in frozen
+    trials = run_drill(scene, result, 100, np.random.default_rng(5))
+    assert all(t.ok for t in trials), [t for t in trials if not t.ok][:1]

@@ -125,3 +125,26 @@ def test_a_search_for_other_joints_shares_the_traced_manifolds(fig3a):
     assert other.manifolds() is traced
     assert other.joints == (2,) and other.checker is search.checker
     assert other.run().tolerated_joints == (2,)
+
+
+def test_a_six_joint_arms_tool_axis_task_turns_the_last_joint_alone():
+    """The tool point on the last joint's axis: the self-motion of a tool axis turns that
+    joint alone; it is tolerated, and asking for the others says which keep their angle."""
+    scene = load_scene(SCENES / 'jaco2_free_axis.yaml')
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.tolerated_joints == (5,)
+    every = plan(scene.with_tolerated(None), PlannerOptions(coverage_attempts=0))
+    assert not every.feasible
+    assert f'{scene.robot.joint_names[0]} keeps its angle along each branch' in every.reason
+
+
+def test_a_vertical_tool_holds_the_ur5es_wrist_2_still():
+    """Pointing down at start and goal, wrist 2 is at -90 deg on M_s and M_g alike."""
+    scene = load_scene(SCENES / 'ur5e_free_axis.yaml')
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.stats['held_joints'] == ['wrist_2_joint']
+    assert np.all(result.surface.paths[..., 4] == result.theta_s[4])
+    assert np.isclose(result.theta_s[4], -np.pi / 2, atol=1e-6) or \
+        np.isclose(result.theta_s[4], np.pi / 2, atol=1e-6)

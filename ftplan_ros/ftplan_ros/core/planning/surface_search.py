@@ -488,9 +488,9 @@ def _necessary_condition_reason(names: tuple[str, ...], options: list[list[int]]
         if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
             angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
             reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
-                       f'self-motion ({", ".join(map(str, angles))} rad: a spherical '
-                       'shoulder and wrist fix the elbow for a pose): locked at any other '
-                       'angle it can never reach the goal')
+                       f'self-motion ({", ".join(map(str, angles))} rad: the self-motion '
+                       'does not move it): locked at any other angle it can never reach the '
+                       'goal')
     return reason
 
 
