@@ -148,3 +148,40 @@ def test_a_vertical_tool_holds_the_ur5es_wrist_2_still():
     assert np.all(result.surface.paths[..., 4] == result.theta_s[4])
     assert np.isclose(result.theta_s[4], -np.pi / 2, atol=1e-6) or \
         np.isclose(result.theta_s[4], np.pi / 2, atol=1e-6)
+
+
+def test_the_finer_round_is_skipped_only_when_none_of_its_starts_could_pass():
+    """Brute force: when a joint's angles along M_s miss every free arc's, the finer
+    round's starts are computed anyway and none passes eq. 6 for that joint."""
+    from ftplan_ros.bench.spatial import random_task
+    from ftplan_ros.core.paper.failure_planes import goal_free_arcs, necessary_condition
+    rng = np.random.default_rng(0)
+    random_task('iiwa14', rng)
+    scene = random_task('iiwa14', rng)  # the spatial benchmark's second task
+    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(1),
+                           lambda line: None, ManifoldCache())
+    result = search.run()
+    assert not result.feasible and result.stats['candidate_subdivisions'] == 1
+    M_s, M_g = search.manifolds()
+    arcs = [M_g[a.branch].arc_points(a.first, a.count) for a in goal_free_arcs(M_g, 0.0)]
+    beyond = search._out_of_reach_of_every_arc(M_s, arcs)
+    joint = next(j for j in search.moving if scene.robot.joint_names[j] in beyond)
+    finer = search._start_candidates(M_s, PlannerOptions().candidate_refinement)
+    assert len(finer) > len(search._start_candidates(M_s, 1))
+    assert not any(necessary_condition(scene.robot, finer, points, (joint,)).any()
+                   for points in arcs)
+
+
+def test_the_finer_round_is_kept_when_a_joints_angles_reach_an_arc():
+    """The screen names a joint only when its range along M_s misses every arc's."""
+    scene = load_scene(SCENES / 'iiwa_free_pose.yaml')
+    search = SurfaceSearch(scene, PlannerOptions(), np.random.default_rng(0),
+                           lambda line: None, ManifoldCache())
+    M_s, _ = search.manifolds()
+    search._hold_still(M_s, M_s)
+    arcs = [branch.points for branch in M_s]
+    assert search._out_of_reach_of_every_arc(M_s, arcs) == ''
+    shifted = [points.copy() for points in arcs]
+    for points in shifted:
+        points[:, 2] += 10.0  # iiwa_joint_3's angles out of M_s's range (+-2.97 rad)
+    assert 'iiwa_joint_3' in search._out_of_reach_of_every_arc(M_s, shifted)

@@ -53,6 +53,9 @@ log = logging.getLogger(__name__)
 CRITERION = 'largest minimum clearance at the vertices of the failure surface'
 # [m] the ranking's clearances are cheap lower bounds (checker.py), tight below this
 _RANKING_CLEARANCE = 0.1
+# [rad] how far a start between two traced points of M_s may take a joint past both: a
+# whole continuation step (ManifoldOptions.step_max), where Newton moves it by far less
+_FINER_SLACK = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,6 +169,10 @@ class SurfaceSearch:
             blocked = search.blocked_joints or blocked
             if search.surface is not None or not arcs:
                 break
+            beyond = self._out_of_reach_of_every_arc(M_s, arc_points)
+            if beyond:
+                self.report(f'no start between them can pass eq. (6) either: {beyond}')
+                break
             self.report(f'no plan from {len(candidates)} starts; trying starts between them')
         stats['collision_checks'] = self.checker.checks
         stats['tolerated_joints'] = [self.robot.joint_names[i] for i in self.joints]
@@ -219,6 +226,27 @@ class SurfaceSearch:
             manifolds.append(tuple(mark_obstacle_free(b, self.checker, self.margin)
                                    for b in branches))
         return manifolds[0], manifolds[1]
+
+    def _out_of_reach_of_every_arc(self, M_s: tuple[SelfMotionManifold, ...],
+                                   arc_points: list[np.ndarray]) -> str:
+        """Say which moving joint's angles along M_s miss those of every free arc, or ''.
+
+        Eq. 6 for joint i needs θ_s,i between two neighbouring values θ_i of a free arc.
+        The finer round's starts lie between neighbouring points of M_s, moved back onto
+        it by Newton (by far less than `_FINER_SLACK`), so their θ_i stay within the
+        branch's range widened by that slack: when that misses every arc's range, none of
+        them passes and the round is skipped. Periodic joints are not screened.
+        """
+        for j in self.moving:
+            if self.robot.periodic[j]:
+                continue
+            starts = [(b.points[:, j].min() - _FINER_SLACK, b.points[:, j].max() + _FINER_SLACK)
+                      for b in M_s]
+            if not any(low <= points[:, j].max() and points[:, j].min() <= high
+                       for low, high in starts for points in arc_points):
+                return (f'the angles of {self.robot.joint_names[j]} along M_s miss those of '
+                        'every free arc of M_g')
+        return ''
 
     def _hold_still(self, M_s: tuple[SelfMotionManifold, ...],
                     M_g: tuple[SelfMotionManifold, ...]) -> None:
