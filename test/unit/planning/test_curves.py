@@ -1,13 +1,15 @@
 """Plans on curves of frozen joints (core/planning/curves.py), for redundancy 2 or more."""
 
 import numpy as np
-from ftplan_testing import robot_config, within_limits
+import pytest
+from ftplan_testing import SCENES, robot_config, within_limits
 
-from ftplan_ros.core import plan
+from ftplan_ros.core import ManifoldCache, PlannerOptions, load_scene, plan
 from ftplan_ros.core.io.scene_file import parse_scene
 from ftplan_ros.core.model.robot import task_errors, task_residuals
 from ftplan_ros.core.model.scene import Scene, Task
-from ftplan_ros.core.planning.curves import FrozenJoints
+from ftplan_ros.core.planning.curves import CurveSearch, FrozenJoints
+from ftplan_ros.core.planning.drill import run_drill
 
 FROZEN = ((1, 4), (0.3, -0.5))  # panda_joint2 and panda_joint5 held at these angles [rad]
 
@@ -80,3 +82,77 @@ def test_an_axis_plan_on_the_panda():
     assert angle <= PANDA_AXIS.orientation_tolerance
     start = scene.robot.tool_frames(result.theta_s)
     assert np.linalg.norm(start[:3, 3] - PANDA_AXIS.start[:3]) <= PANDA_AXIS.goal_tolerance
+
+
+class _RecordingCurves(CurveSearch):
+    """A curve search that keeps each planned curve's criterion and chunk."""
+
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.planned: list[tuple[int, int]] = []  # (curves examined so far, feasible starts)
+
+    def _plan(self, candidate, search, count):
+        self.planned.append((self.examined, count))
+        return super()._plan(candidate, search, count)
+
+
+def _curve_search(scene, seed, cls=CurveSearch, options=None):
+    return cls(scene, options or PlannerOptions(), np.random.default_rng(seed),
+               lambda line: None, ManifoldCache())
+
+
+@pytest.mark.parametrize('seed', [0, 7])
+def test_a_free_space_position_task_plans_whatever_the_seed(seed):
+    """Seeds 0 and 7 said 'no plan on the 6 curves tried' when the clearest samples'
+    curves were planned in turn (issue 35)."""
+    scene = load_scene(SCENES / 'panda_free_position.yaml')
+    result = plan(scene, rng=np.random.default_rng(seed))
+    assert result.feasible, result.reason
+    assert result.stats['curve']['feasible_starts'] > 0
+
+
+def test_curves_are_planned_most_feasible_starts_first():
+    """Within a chunk, a curve is planned only with starts passing eq. 6, most first."""
+    scene = load_scene(SCENES / 'panda_free_position.yaml')
+    search = _curve_search(scene, 0, _RecordingCurves)
+    result = search.run()
+    assert result.feasible, result.reason
+    assert search.planned and all(count > 0 for _, count in search.planned)
+    for chunk in {examined for examined, _ in search.planned}:
+        counts = [count for examined, count in search.planned if examined == chunk]
+        assert counts == sorted(counts, reverse=True)
+    assert result.stats['curve']['feasible_starts'] == search.planned[-1][1]
+
+
+class _HopelessCurves(CurveSearch):
+    """A curve search on which no start of any slice passes eq. 6."""
+
+    def _examine(self, candidate):
+        self.examined_candidates = getattr(self, 'examined_candidates', []) + [candidate]
+        return 0, None
+
+
+def test_no_is_said_only_after_the_whole_budget_of_curves():
+    scene = load_scene(SCENES / 'panda_free_position.yaml')
+    options = PlannerOptions(curves=30)  # more than one draw of candidates gives (about 20)
+    search = _curve_search(scene, 0, _HopelessCurves, options)
+    result = search.run()
+    assert not result.feasible
+    assert len(search.examined_candidates) == 30 == result.stats['curves_examined']
+    assert 'no plan on the 30 curves examined' in result.reason
+    values = {candidate[1] for candidate in search.examined_candidates}
+    assert len(values) == 30  # fresh samples, no curve examined twice
+
+
+@pytest.mark.parametrize('name', ['ur5e_free_position', 'jaco2_free_position'])
+def test_six_joint_arms_plan_position_tasks_tolerating_every_joint(name):
+    """Redundancy 3: two joints frozen (the last, which moves the tool point not at all,
+    among them), every joint's lock recovered in a drill."""
+    scene = load_scene(SCENES / f'{name}.yaml')
+    result = plan(scene)
+    assert result.feasible, result.reason
+    assert result.tolerated_joints == tuple(range(6))
+    frozen = result.stats['curve']['frozen_joints']
+    assert len(frozen) == 2 and scene.robot.joint_names[5] in frozen
+    trials = run_drill(scene, result, 100, np.random.default_rng(5))
+    assert all(t.ok for t in trials), [t for t in trials if not t.ok][:1]

@@ -297,3 +297,14 @@ def test_tolerating_the_elbow_too_is_infeasible_and_says_why():
     others = [name for name in scene.robot.joint_names if name != IIWA_ELBOW]
     assert result.stats['coverable_joints'] == others
     assert re.search(r'keeps its angle along each branch', result.reason), result.reason
+
+
+def test_the_answer_alone_goes_on_to_no_coverage_search():
+    """`coverage_attempts=0` (the spatial benchmark's setting) answers "no" without
+    planning for fewer joints, and the reason says why without a hint."""
+    scene = iiwa_scene(None)
+    result = plan(scene, PlannerOptions(coverage_attempts=0))
+    assert not result.feasible
+    assert IIWA_ELBOW in result.reason
+    assert 'coverable_joints' not in result.stats
+    assert '`tolerate`' not in result.reason

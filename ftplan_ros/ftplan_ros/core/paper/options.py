@@ -22,8 +22,11 @@ class PlannerOptions:
     coarse_waypoints: int = 8         # waypoints of each path of the ranking fans
     max_verifications: int = 40       # surfaces verified at most
     candidate_refinement: int = 4     # start candidates per manifold step on the retry
-    curves: int = 6                   # redundancy >= 2: curves on the manifolds tried at most
+    curves: int = 48                  # redundancy >= 2: curves on the manifolds examined at most
     curve_samples: int = 64           # redundancy >= 2: inverse-kinematics samples per task point
+    # r = 1, no plan for every tolerated joint: sets of the others planned for, to report
+    # which a plan covers (`coverable_joints`); 0 for the answer alone (1-3 s less on a "no").
+    coverage_attempts: int = 3
     # The methods tried in turn: the paper's surface always, then where it finds no plan
     # recovery sheets over the failure-tolerant set on a joint grid (planar 3R arms among
     # disks; grid/recovery_sheets.py). Leave 'recovery_sheets' out for the paper's method alone.

@@ -18,6 +18,9 @@ reaches the goal. The proof has three parts, each checked here rather than trust
 3. A recovery path exists for every lock of a tolerated joint. For the paper's fan (one
    sheet): the nominal path is monotonic in every joint, the bottom row is exactly θ_s
    and the path to θ_{H_i} keeps θ_i = θ_s,i exactly (the argument in `recovery.py`).
+   For a joint held still (`held_joints.py`) that path is the nominal path itself, so
+   the same exact check proves that the rest of the nominal path, clear by part 1 and
+   ending on the goal row by part 2, recovers each of its locks.
    For any other web: the slice of S_F at every level the nominal path takes joins every
    nominal point on it to the goal row, checked at each vertex value of θ_i and between
    each two (`slices.py`). And, as a check of the implementation, `recover` is run at

@@ -10,11 +10,14 @@ reaches the goal: the plan tolerates frozen joints for free, and the self-check 
 it like every other lock, on the lifted surface in the whole joint space.
 
 Criterion: candidate (F, c) come from collision-free inverse-kinematics samples of x_s
-(c = their angles on F); F holds the joints that move the tool least (smallest mean
-Jacobian column over the samples), and the candidates are ranked by the smaller
-clearance of the start sample and of the clearest goal configuration on the same slice.
-The best `PlannerOptions.curves` are planned in turn; the first verified plan wins, and
-the result's stats name its curve.
+(c = their angles on F) whose slice of M_g has a clear sample; F holds the joints that
+move the tool least (smallest mean Jacobian column over the samples). Each candidate is
+examined by Steps 1-3 on its slices, and scored by how many starts on the slice of M_s
+pass the necessary condition (eq. 6) on one free arc of the slice of M_g (`CurveSearch`).
+Candidates are examined in chunks; in each, those with such starts are planned, most
+first, and the first verified plan wins. Fresh samples give further candidates until
+`PlannerOptions.curves` were examined, so that a "no" does not hinge on the seed. The
+result's stats name the curve.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from itertools import combinations
 import numpy as np
 
 from ..collision.checker import CollisionChecker
+from ..errors import InputError
 from ..model import kinematics
 from ..model.robot import LinkShape, Robot, task_residuals
 from ..model.scene import Scene
@@ -38,9 +42,11 @@ from ..paper.verification import verify_surface
 from .surface_search import SurfaceSearch
 
 CURVE_CRITERION = ('slice θ_F = c of M_s and M_g; F: the joints that move the tool least; '
-                   'c: the clearest inverse-kinematics sample of x_s whose slice reaches '
-                   'x_g clear of obstacles')
+                   'c: from clear inverse-kinematics samples of x_s whose slice reaches x_g; '
+                   'ranked by the starts on the slice passing the necessary condition')
 _FREEZE_SETS = 3  # frozen joint sets tried, least influential first
+_CHUNK = 8        # curves examined (Steps 1-3) before the best of them are planned
+_STARTS = 16      # clearest start samples whose values c make candidates, per frozen set
 
 
 @dataclass(frozen=True)
@@ -161,33 +167,118 @@ def plan_on_curves(scene: Scene, options: PlannerOptions, rng: np.random.Generat
                    report: Callable[[str], None], cache: ManifoldCache,
                    start_configuration: np.ndarray | None = None) -> PlanResult:
     """Plan a scene of redundancy r >= 2 on chosen curves (see the module docstring)."""
-    robot = scene.robot
-    candidates = curve_candidates(scene, options, rng, start_configuration)
-    report(f'redundancy {robot.n_joints - robot.task_dim}: {len(candidates)} curves to try')
-    result = None
-    for number, (frozen, values, score) in enumerate(candidates[:options.curves], start=1):
-        reduced = FrozenJoints(robot, frozen, values)
+    return CurveSearch(scene, options, rng, report, cache, start_configuration).run()
+
+
+class CurveSearch:
+    """Examine curves chunk by chunk, plan the best of each, until one plan verifies.
+
+    A curve is examined by Steps 1-3 on its slices (`SurfaceSearch.count_feasible_starts`):
+    its criterion is the number of starts on the slice of M_s that pass the necessary
+    condition on one free arc of the slice of M_g. In each chunk of `_CHUNK` curves, those
+    with any such start are planned, most first. Candidates come from fresh
+    inverse-kinematics samples while fewer than `options.curves` curves were examined, so
+    a "no" means that none of that many curves holds a plan, whatever the seed.
+    """
+
+    def __init__(self, scene: Scene, options: PlannerOptions, rng: np.random.Generator,
+                 report: Callable[[str], None], cache: ManifoldCache,
+                 start_configuration: np.ndarray | None = None):
+        self.scene = scene
+        self.robot = scene.robot
+        self.options = options
+        self.rng = rng
+        self.report = report
+        # Each curve's slices are traced once for its criterion and again when it is
+        # planned: the cache holds a chunk's (the caller's keeps its own size).
+        self.cache = cache if cache.size >= 2 * _CHUNK else ManifoldCache(size=2 * _CHUNK)
+        self.start_configuration = start_configuration
+        self.examined = 0
+        self.promising = 0  # examined curves with a start passing eq. 6
+
+    def run(self) -> PlanResult:
+        """Plan on the curves in turn (see the class docstring)."""
+        robot = self.robot
+        self.report(f'redundancy {robot.n_joints - robot.task_dim}: examining up to '
+                    f'{self.options.curves} curves on the manifolds')
+        last: PlanResult | None = None
+        for chunk in self._chunks():
+            scored = [(self._examine(candidate), candidate) for candidate in chunk]
+            scored.sort(key=lambda pair: -pair[0][0])  # stable: ties keep their rank
+            for (count, search), candidate in scored:
+                if count == 0:
+                    break
+                last = self._plan(candidate, search, count)
+                if last.feasible:
+                    return last
+        return self._no_plan(last)
+
+    def _chunks(self):
+        """Yield lists of up to `_CHUNK` candidates, fresh samples while the budget lasts."""
+        chunk: list = []
+        while self.examined + len(chunk) < self.options.curves:
+            batch = curve_candidates(self.scene, self.options, self.rng, self.start_configuration)
+            for candidate in batch[:self.options.curves - self.examined - len(chunk)]:
+                chunk.append(candidate)
+                if len(chunk) == _CHUNK:
+                    self.examined += len(chunk)
+                    yield chunk
+                    chunk = []
+            if not batch or self.start_configuration is not None:
+                break
+        if chunk:
+            self.examined += len(chunk)
+            yield chunk
+
+    def _examine(self, candidate) -> tuple[int, SurfaceSearch]:
+        """Run Steps 1-3 on the slices: return (starts passing eq. 6, the reduced search)."""
+        frozen, values, _ = candidate
+        reduced = FrozenJoints(self.robot, frozen, values)
         free_names = set(reduced.joint_names)
-        tolerated = [robot.joint_names[j] for j in scene.tolerated_joints
-                     if robot.joint_names[j] in free_names]
-        reduced_scene = replace(scene, robot=reduced, tolerate=tuple(tolerated))
-        start = None if start_configuration is None else \
-            np.asarray(start_configuration, dtype=float)[reduced.free]
-        attempt = SurfaceSearch(reduced_scene, options, rng, report, cache).run(start)
-        curve = {'frozen_joints': [robot.joint_names[j] for j in frozen],
+        tolerated = [self.robot.joint_names[j] for j in self.scene.tolerated_joints
+                     if self.robot.joint_names[j] in free_names]
+        reduced_scene = replace(self.scene, robot=reduced, tolerate=tuple(tolerated))
+        search = SurfaceSearch(reduced_scene, self.options, self.rng, self.report, self.cache)
+        start = None if self.start_configuration is None else \
+            np.asarray(self.start_configuration, dtype=float)[reduced.free]
+        try:
+            count = search.count_feasible_starts(start)
+        except InputError:  # the trace found no branch of a slice: nothing to plan on
+            count = 0
+        self.promising += count > 0
+        return count, search
+
+    def _plan(self, candidate, search: SurfaceSearch, count: int) -> PlanResult:
+        """Run Steps 4-6 and the self-check on one curve, lifted to the whole joint space."""
+        frozen, values, clearance = candidate
+        reduced = search.robot
+        start = None if self.start_configuration is None else \
+            np.asarray(self.start_configuration, dtype=float)[reduced.free]
+        attempt = search.run(start)
+        curve = {'frozen_joints': [self.robot.joint_names[j] for j in frozen],
                  'frozen_values_rad': list(values), 'criterion': CURVE_CRITERION,
-                 'criterion_value_m': score, 'curves_tried': number}
-        result = _lift(scene, reduced, attempt, curve, options)
-        if result.feasible:
-            return result
-    if result is None:
-        stats = {'curves_tried': 0, 'tolerated_joints': [robot.joint_names[j]
-                                                         for j in scene.tolerated_joints]}
-        return PlanResult(False, robot.joint_names, 'no curve: no obstacle-free inverse '
-                          'kinematics of x_s whose slice reaches x_g clear of obstacles',
-                          stats=stats, periodic=robot.periodic)
-    return replace(result, reason=f'no plan on the {min(len(candidates), options.curves)} '
-                   f'curves tried; the last: {result.reason}')
+                 'feasible_starts': count, 'clearance_m': clearance,
+                 'curves_examined': self.examined}
+        return _lift(self.scene, reduced, attempt, curve, self.options)
+
+    def _no_plan(self, last: PlanResult | None) -> PlanResult:
+        """Answer when no curve examined holds a verified plan."""
+        robot = self.robot
+        stats = {'curves_examined': self.examined, 'curves_promising': self.promising,
+                 'tolerated_joints': [robot.joint_names[j] for j in self.scene.tolerated_joints]}
+        if not self.examined:
+            return PlanResult(False, robot.joint_names, 'no curve: no obstacle-free inverse '
+                              'kinematics of x_s whose slice reaches x_g clear of obstacles',
+                              stats=stats, periodic=robot.periodic)
+        if last is None:
+            return PlanResult(False, robot.joint_names, f'no plan on the {self.examined} '
+                              'curves examined: on none of them does a start pass the '
+                              'necessary condition for every tolerated joint', stats=stats,
+                              periodic=robot.periodic)
+        return replace(last, stats=dict(last.stats, **stats),
+                       reason=f'no plan on the {self.examined} curves examined '
+                       f'({self.promising} with starts passing the necessary condition); '
+                       f'the last planned: {last.reason}')
 
 
 def curve_candidates(scene: Scene, options: PlannerOptions, rng: np.random.Generator,
@@ -209,7 +300,7 @@ def curve_candidates(scene: Scene, options: PlannerOptions, rng: np.random.Gener
     if len(starts) == 0:
         return []
     clear_starts = checker.min_clearance(starts, margin + 0.1, refine=False)
-    order = np.argsort(-_tied(clear_starts), kind='stable')[:8]
+    order = np.argsort(-_tied(clear_starts), kind='stable')[:_STARTS]
     per_set = []
     for frozen in _freeze_sets(robot, starts, robot.n_joints - robot.task_dim - 1,
                                scene.tolerated_joints):

@@ -100,8 +100,8 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
         search = SurfaceSearch(scene, options, rng, report, cache, checker, prefer_starts)
         result = _paper_then_sheets(search, scene, options, report, start_configuration,
                                     prefer_starts)
-        if not result.feasible and start_configuration is None:
-            result = _with_coverage(scene, result, options, rng, report, cache, checker)
+        if not result.feasible and start_configuration is None and options.coverage_attempts:
+            result = _with_coverage(search, result, report, options.coverage_attempts)
     else:
         result = plan_on_curves(scene, options, rng, report, cache, start_configuration)
     stats = {'method': PAPER_METHOD} | dict(result.stats, plan_time_s=time.perf_counter() - started)
@@ -141,25 +141,25 @@ def _paper_then_sheets(search: SurfaceSearch, scene: Scene, options: PlannerOpti
     return with_sheets(search.run(subdivisions=finer), sheets)
 
 
-def _with_coverage(scene: Scene, result: PlanResult, options: PlannerOptions,
-                   rng: np.random.Generator, report: Callable[[str], None],
-                   cache: ManifoldCache, checker: CollisionChecker,
-                   attempts: int = 3) -> PlanResult:
+def _with_coverage(search: SurfaceSearch, result: PlanResult,
+                   report: Callable[[str], None], attempts: int) -> PlanResult:
     """Add to a failed result the largest set of joints a plan could still tolerate.
 
     When some joints' failure planes keep every start from the necessary condition
     (`result.blocked_joints`, likeliest set first), the others are planned for, set by
-    set, up to `attempts` sets; the first that plans is reported as `coverable_joints`.
+    set, up to `attempts` sets, on the manifolds `search` traced and with its first round
+    of starts only (a report, not the answer: it costs the failed plan no more than a
+    search of its own); the first that plans is reported as `coverable_joints`.
     """
-    requested = [scene.robot.joint_names[i] for i in scene.tolerated_joints]
+    robot = search.robot
+    requested = [robot.joint_names[i] for i in search.joints]
     reason = ''
     for blocked in result.blocked_joints[:attempts]:
         others = [name for name in requested if name not in blocked]
         if not others:
             continue
         report(f'no plan tolerates {", ".join(blocked)}: trying the other joints')
-        partial = SurfaceSearch(scene.with_tolerated(others), options, rng, report,
-                                cache, checker).run()
+        partial = search.for_joints(others).run(subdivisions=(1,))
         if partial.feasible:
             return replace(result, stats=dict(result.stats, coverable_joints=others),
                            reason=result.reason + f'; a plan tolerates the locks of '

@@ -37,6 +37,7 @@ from ..paper.failure_surface import (
     lift_goal_arc,
     smallest_windows,
 )
+from ..paper.held_joints import held_joints, same_angle
 from ..paper.manifolds import (
     ManifoldCache,
     SelfMotionManifold,
@@ -53,6 +54,9 @@ log = logging.getLogger(__name__)
 CRITERION = 'largest minimum clearance at the vertices of the failure surface'
 # [m] the ranking's clearances are cheap lower bounds (checker.py), tight below this
 _RANKING_CLEARANCE = 0.1
+# [rad] how far a start between two traced points of M_s may take a joint past both: a
+# whole continuation step (ManifoldOptions.step_max), where Newton moves it by far less
+_FINER_SLACK = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,6 +124,11 @@ class SurfaceSearch:
         self.report = report
         self.cache = cache
         self.joints = scene.tolerated_joints
+        # Tolerated joints held still over the web (held_joints.py) and the others, whose
+        # failure planes cross M_g^F; set once the manifolds are traced.
+        self.held: tuple[int, ...] = ()
+        self.moving = self.joints
+        self._manifolds: tuple | None = None
         self.margin = options.verification.margin
         self.checker = checker or CollisionChecker(self.robot, scene.obstacles)
         self.prefer_starts = prefer_starts
@@ -135,9 +144,12 @@ class SurfaceSearch:
         `options.candidate_refinement`.
         """
         M_s, M_g = self.manifolds()
+        self._hold_still(M_s, M_g)
         arcs = goal_free_arcs(M_g, self.margin)
         stats: dict = {'criterion': CRITERION, 'start_branches': len(M_s),
                        'goal_branches': len(M_g), 'goal_free_arcs': len(arcs)}
+        if self.held:
+            stats['held_joints'] = [self.robot.joint_names[j] for j in self.held]
         arc_points = [M_g[arc.branch].arc_points(arc.first, arc.count) for arc in arcs]
         arc_laps = [arc.lap for arc in arcs]
         # Candidates one step apart along M_s and, when that finds nothing, between them
@@ -158,6 +170,10 @@ class SurfaceSearch:
             blocked = search.blocked_joints or blocked
             if search.surface is not None or not arcs:
                 break
+            beyond = self._out_of_reach_of_every_arc(M_s, arc_points)
+            if beyond:
+                self.report(f'no start between them can pass eq. (6) either: {beyond}')
+                break
             self.report(f'no plan from {len(candidates)} starts; trying starts between them')
         if search.surface is None and start_configuration is None:
             search = self._explain_nothing_free(search, M_s, M_g, len(candidates), len(arcs))
@@ -169,8 +185,41 @@ class SurfaceSearch:
                           self.robot.periodic, goal_free_arcs=len(arcs), blocked_joints=blocked,
                           start_preferred=search.start_preferred)
 
+    def for_joints(self, names: list[str]) -> SurfaceSearch:
+        """Return a search of the same task tolerating the named joints.
+
+        It shares this search's checker and, once traced, its manifolds with their
+        clearances (the task and the obstacles are the same).
+        """
+        other = SurfaceSearch(self.scene.with_tolerated(names), self.options, self.rng,
+                              self.report, self.cache, self.checker)
+        other._manifolds = self._manifolds
+        return other
+
+    def count_feasible_starts(self, start_configuration: np.ndarray | None = None) -> int:
+        """Run Steps 1-3 alone: how many start candidates pass eq. 6 on one free arc of M_g^F.
+
+        Candidates as `run`'s first round (or the given start alone). The curves of
+        redundancy r >= 2 are ranked by it (curves.py).
+        """
+        M_s, M_g = self.manifolds()
+        self._hold_still(M_s, M_g)
+        candidates = self._start_candidates(M_s, 1) if start_configuration is None \
+            else self._given_start(start_configuration)
+        passing = np.zeros(len(candidates), dtype=bool)
+        for arc in goal_free_arcs(M_g, self.margin):
+            points = M_g[arc.branch].arc_points(arc.first, arc.count)
+            passing |= self._necessary_condition(candidates, points).all(axis=1)
+        return int(passing.sum())
+
     def manifolds(self) -> tuple[tuple[SelfMotionManifold, ...], tuple[SelfMotionManifold, ...]]:
-        """Trace M_s and M_g with the clearance of their points (Steps 1-2)."""
+        """Trace M_s and M_g with the clearance of their points (Steps 1-2), once per search."""
+        if self._manifolds is None:
+            self._manifolds = self._trace_manifolds()
+        return self._manifolds
+
+    def _trace_manifolds(self):
+        """Trace the branches of M_s and M_g and mark their obstacle-free points."""
         self.report('tracing self-motion manifolds')
         manifolds = []
         for name, x in (('task.start', self.x_s), ('task.goal', self.x_g)):
@@ -181,6 +230,40 @@ class SurfaceSearch:
             manifolds.append(tuple(mark_obstacle_free(b, self.checker, self.margin)
                                    for b in branches))
         return manifolds[0], manifolds[1]
+
+    def _out_of_reach_of_every_arc(self, M_s: tuple[SelfMotionManifold, ...],
+                                   arc_points: list[np.ndarray]) -> str:
+        """Say which moving joint's angles along M_s miss those of every free arc, or ''.
+
+        Eq. 6 for joint i needs θ_s,i between two neighbouring values θ_i of a free arc.
+        The finer round's starts lie between neighbouring points of M_s, moved back onto
+        it by Newton (by far less than `_FINER_SLACK`), so their θ_i stay within the
+        branch's range widened by that slack: when that misses every arc's range, none of
+        them passes and the round is skipped. Periodic joints are not screened.
+        """
+        for j in self.moving:
+            if self.robot.periodic[j]:
+                continue
+            starts = [(b.points[:, j].min() - _FINER_SLACK, b.points[:, j].max() + _FINER_SLACK)
+                      for b in M_s]
+            if not any(low <= points[:, j].max() and points[:, j].min() <= high
+                       for low, high in starts for points in arc_points):
+                return (f'the angles of {self.robot.joint_names[j]} along M_s miss those of '
+                        'every free arc of M_g')
+        return ''
+
+    def _hold_still(self, M_s: tuple[SelfMotionManifold, ...],
+                    M_g: tuple[SelfMotionManifold, ...]) -> None:
+        """Split the tolerated joints into those held still and those that move.
+
+        A joint is held when its angle is one value along every branch of M_s and M_g
+        (held_joints.py) and some other tolerated joint moves: the web of those is what
+        carries the plan.
+        """
+        held = held_joints(M_s, M_g, self.joints)
+        if len(held) < len(self.joints):
+            self.held = held
+            self.moving = tuple(j for j in self.joints if j not in held)
 
     def _search_preferred(self, candidates: np.ndarray, arc_points: list[np.ndarray],
                           arc_laps: list[int]) -> _Search:
@@ -223,7 +306,7 @@ class SurfaceSearch:
             return _Search(None, 'every goal configuration collides (M_g^F is empty)')
 
         # Step 3: the necessary condition, on M_g^F as a whole (the paper's Θ_s) and per arc.
-        per_arc = np.stack([necessary_condition(self.robot, candidates, points, self.joints)
+        per_arc = np.stack([self._necessary_condition(candidates, points)
                             for points in arc_points])  # (arcs, C, J)
         necessary_starts = candidates[per_arc.any(axis=0).all(axis=1)]
         single_arc = per_arc.all(axis=2)  # (arcs, C)
@@ -252,6 +335,19 @@ class SurfaceSearch:
             return _Search(None, 'no failure surface: every surface proposed hits an obstacle '
                            'at one of its vertices', stats, necessary_starts, proposed)
         return self._verify_best(candidates, arc_points, ranking, stats, necessary_starts, proposed)
+
+    def _necessary_condition(self, candidates: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Test eq. 6 on one free arc (a, n): (C, J) bool over the tolerated joints.
+
+        A moving joint's failure plane must cross the arc; a held joint's must hold it.
+        """
+        passing = np.empty((len(candidates), len(self.joints)), dtype=bool)
+        moving = [self.joints.index(j) for j in self.moving]
+        passing[:, moving] = necessary_condition(self.robot, candidates, points, self.moving)
+        for j in self.held:
+            passing[:, self.joints.index(j)] = same_angle(candidates, points, j,
+                                                          bool(self.robot.periodic[j]))
+        return passing
 
     def _verify_best(self, candidates: np.ndarray, arc_points: list[np.ndarray],
                      ranking: _Ranking, stats: dict, necessary_starts: np.ndarray,
@@ -340,13 +436,13 @@ class SurfaceSearch:
         for a, points in enumerate(arc_points):
             members = np.flatnonzero(single_arc[a])
             crossings = [chord_crossings(self.robot, candidates[members], points, i)
-                         for i in self.joints]
+                         for i in self.moving]
             slots, spans, chosen = smallest_windows(
                 np.concatenate([which for which, _, _ in crossings]),
                 np.concatenate([np.full(len(which), k) for k, (which, _, _) in
                                 enumerate(crossings)]),
                 np.concatenate([positions for _, positions, _ in crossings]),
-                len(members), len(self.joints), arc_laps[a])
+                len(members), len(self.moving), arc_laps[a])
             fans.append(np.concatenate([thetas for _, _, thetas in crossings])[chosen])
             owners.append(members[slots])
             arcs.append(np.full(len(slots), a))
@@ -356,7 +452,7 @@ class SurfaceSearch:
         if not len(owners):
             return _Ranking(np.zeros(0), owners, arcs, np.zeros((0, 2)))
         fans = _coarse_fans(candidates, arc_points, owners, arcs, windows, np.concatenate(fans),
-                            self.joints, self.robot.periodic, self.options.coarse_waypoints)
+                            self.moving, self.robot.periodic, self.options.coarse_waypoints)
         clearance = self.checker.min_clearance(fans.reshape(-1, fans.shape[-1]),
                                                self.margin + _RANKING_CLEARANCE,
                                                refine=False).reshape(len(fans), -1).min(axis=1)
@@ -367,7 +463,7 @@ class SurfaceSearch:
     def _fine_surface(self, theta_s: np.ndarray, arc_points: np.ndarray,
                       window: tuple[float, float]) -> FailureSurface | None:
         """Build the web to verify: exact hits, full resolution, the clearest nominal path."""
-        hits = failure_plane_hits(self.robot, self.x_g, theta_s, arc_points, self.joints)
+        hits = failure_plane_hits(self.robot, self.x_g, theta_s, arc_points, self.moving)
         inside = [[h for h in joint_hits if window[0] - 1 <= h.position <= window[1] + 1]
                   for joint_hits in hits]
         if not all(inside):
@@ -376,9 +472,9 @@ class SurfaceSearch:
                   max(h.position for hs in inside for h in hs))
         chosen = choose_hits(inside, window)
         lifted, lifted_hits = lift_goal_arc(theta_s, arc_points, chosen, self.robot.periodic)
-        surface = build_failure_surface(theta_s, lifted, lifted_hits, window,
-                                        self.options.column_spacing,
-                                        self.options.waypoint_spacing)
+        surface = self._hold(build_failure_surface(theta_s, lifted, lifted_hits, window,
+                                                   self.options.column_spacing,
+                                                   self.options.waypoint_spacing))
         clearance = self.checker.min_clearance(surface.vertices, self.margin).reshape(
             surface.paths.shape[:2])
         if not clearance.min() > self.margin:  # or NaN
@@ -386,7 +482,22 @@ class SurfaceSearch:
         # Nominal path: the clearest, and among equally clear ones the shortest.
         lengths = np.linalg.norm(surface.goal_points - theta_s, axis=1)
         nominal = int(np.lexsort((lengths, -clearance.min(axis=1)))[0])
-        return replace(surface, nominal=nominal)
+        hit_of = dict(zip(surface.tolerated, surface.hit_paths, strict=True))
+        return FailureSurface(surface.paths, nominal,
+                              tuple(hit_of.get(j, nominal) for j in self.joints), self.joints)
+
+    def _hold(self, surface: FailureSurface) -> FailureSurface:
+        """Return the web with every held joint at its θ_s value exactly (held_joints.py).
+
+        Its goal points had that value to within the rounding of Newton's method (their
+        task errors are checked again with the web).
+        """
+        if not self.held:
+            return surface
+        paths = np.array(surface.paths)
+        held = list(self.held)
+        paths[..., held] = surface.theta_s[held]
+        return replace(surface, paths=paths)
 
 
 def _blocking_joints(passing: np.ndarray, joints: tuple[int, ...]) -> list[list[int]]:
@@ -425,9 +536,9 @@ def _necessary_condition_reason(names: tuple[str, ...], options: list[list[int]]
         if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
             angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
             reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
-                       f'self-motion ({", ".join(map(str, angles))} rad: a spherical '
-                       'shoulder and wrist fix the elbow for a pose): locked at any other '
-                       'angle it can never reach the goal')
+                       f'self-motion ({", ".join(map(str, angles))} rad: the self-motion '
+                       'does not move it): locked at any other angle it can never reach the '
+                       'goal')
     return reason
 
 
