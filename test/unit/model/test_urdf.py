@@ -185,6 +185,14 @@ PRISMATIC = bot_urdf().replace('<joint name="elbow" type="revolute"',
                                '<joint name="elbow" type="prismatic"')
 
 
+def with_mimic(follower: str, leader: str) -> str:
+    """The bot's URDF with joint `follower` mimicking `leader` (multiplier 1, offset 0)."""
+    xml = bot_urdf()
+    at = xml.index(f'<joint name="{follower}"')
+    end = xml.index('</joint>', at)
+    return xml[:end] + f'<mimic joint="{leader}"/>' + xml[end:]
+
+
 @pytest.mark.parametrize('xml, tip, base, field, words', [
     pytest.param('<robot name="x"><link name="a"></robot>', 'tcp', None, 'robot.file',
                  'not valid XML', id='malformed-xml'),
@@ -205,6 +213,11 @@ PRISMATIC = bot_urdf().replace('<joint name="elbow" type="revolute"',
                  id='missing-mesh-file'),
     pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file', 'collision geometry',
                  id='garbage-mesh-file'),
+    pytest.param(with_mimic('elbow', 'tilt'), 'tcp', None, 'robot.file',
+                 "'elbow' mimics 'tilt'.* coupled joints are not supported", id='mimic-in-chain'),
+    pytest.param(with_mimic('finger_joint', 'wrist'), 'tcp', None, 'robot.file',
+                 "'finger_joint' mimics 'wrist', and 'wrist' moves the chain",
+                 id='mimic-of-a-chain-joint'),
     pytest.param(bot_urdf(), 'l1', 'l3', 'robot.base_link', "'l3' moves with joint 'elbow'",
                  id='base-below-the-tip'),
     pytest.param(bot_urdf(), 'base', None, 'robot.tip_link', "no joint moves 'base'",
@@ -223,6 +236,29 @@ def test_bad_urdfs_give_one_line_naming_the_field(urdf_file, xml, tip, base, fie
         robot_from_urdf(path.read_text(), tip, base, mesh_dirs=[str(path.parent)])
     assert '\n' not in str(error.value)
     assert re.search(words, str(error.value)), str(error.value)
+
+
+def test_a_mimic_joint_off_the_chain_following_one_off_the_chain_is_accepted():
+    """The two fingers of a gripper: both held still, so the coupling changes nothing."""
+    xml = bot_urdf().replace(
+        '<link name="finger">', '<link name="finger">\n  </link>\n  <joint name="finger2" '
+        'type="prismatic"><parent link="hand"/><child link="finger_b"/><axis xyz="0 1 0"/>'
+        '<limit lower="0" upper="0.04" effort="1" velocity="1"/><mimic joint="finger_joint"/>'
+        '</joint>\n  <link name="finger_b">', 1)
+    chain = chain_from_urdf(xml, 'tcp')
+    assert chain.joint_names == ('spin', 'tilt', 'elbow', 'wrist')
+
+
+def test_a_chain_longer_than_the_bound_is_refused_before_it_is_built():
+    """Review of issue 33: a chain of 999 joints (270 kB, within every bound of the URDF's
+    size) kept chain_from_urdf busy for more than 170 s; a planner's robot thread 104 s."""
+    links = ''.join(f'<link name="l{k}"/>' for k in range(41))
+    joints = ''.join(f'<joint name="j{k}" type="revolute"><parent link="l{k}"/><child '
+                     f'link="l{k + 1}"/><origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit '
+                     'lower="-1" upper="1" effort="1" velocity="1"/></joint>' for k in range(40))
+    with pytest.raises(InputError, match=r"robot\.tip_link: 40 joints move 'l40' relative to "
+                       r"'l0': ftplan plans for chains of at most 32"):
+        chain_from_urdf(f'<robot name="long">{links}{joints}</robot>', 'l40')
 
 
 def test_chain_from_urdf_names_its_caller(urdf_file):

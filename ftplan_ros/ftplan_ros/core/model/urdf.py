@@ -27,6 +27,9 @@ _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevolute
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
                'JointModelRevoluteUnboundedUnaligned')
 _PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
+# Joints of a chain: redundant arms have 7 or 8; the cost of building a chain (its
+# self-collision pairs) grows with the square of its links.
+MAX_CHAIN_JOINTS = 32
 
 
 def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str | None = None,
@@ -57,6 +60,10 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     if not path:
         raise InputError(f'{where}.tip_link', f'no joint moves {tip_link!r} relative to '
                          f'{base_link!r}')
+    if len(path) > MAX_CHAIN_JOINTS:
+        raise InputError(f'{where}.tip_link', f'{len(path)} joints move {tip_link!r} relative '
+                         f'to {base_link!r}: ftplan plans for chains of at most '
+                         f'{MAX_CHAIN_JOINTS}; choose a tip_link (or base_link) nearer')
     for joint in path:
         kind = model.joints[joint].shortname()
         if kind not in _REVOLUTE + _CONTINUOUS:
@@ -64,6 +71,8 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
             raise InputError(f'{where}.file', f'joint {model.names[joint]!r} between '
                              f'{base_link!r} and {tip_link!r} is {what} ({kind}): only '
                              'revolute and continuous joints are supported')
+    _refuse_coupled_joints(urdf.mimics, {model.names[j] for j in path}, base_link, tip_link,
+                           where)
     try:
         geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION,
                                                package_dirs=list(mesh_dirs))
@@ -75,6 +84,22 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
         model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
     return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
                   where)
+
+
+def _refuse_coupled_joints(mimics: Sequence[tuple[str, str]], chain: set[str], base_link: str,
+                           tip_link: str, where: str) -> None:
+    """Raise InputError if a mimic joint follows a chain joint or is one itself.
+
+    The chain's joints move independently in every step of the method, and the links
+    off the chain are held still: a coupling to a chain joint would move geometry that
+    the guarantee does not see.
+    """
+    for follower, leader in mimics:
+        if follower in chain or leader in chain:
+            raise InputError(f'{where}.file', f'joint {follower!r} mimics {leader!r}, and '
+                             f'{follower if follower in chain else leader!r} moves the chain '
+                             f'{base_link!r} -> {tip_link!r}: coupled joints are not '
+                             'supported there; remove the <mimic> or choose another tip_link')
 
 
 def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_link: str,
