@@ -138,10 +138,11 @@ class ObstacleSet:
         self.lost = lost or self.lost
         try:
             shapes = read_obstacle_markers(msg, self.base.frame_id, self.shapes)
+            obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
         except ValueError as error:
-            self.lost = f'an obstacle update was refused ({error})'
+            refused = f'an obstacle update was refused ({error})'
+            self.lost = f'{self.lost}; {refused}' if self.lost else refused
             raise
-        obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
         self.shapes, self.obstacles = shapes, obstacles
         if is_full_set(msg):
             self.lost = ''
