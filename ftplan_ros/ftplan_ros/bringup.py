@@ -47,7 +47,7 @@ from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode
 from .nodes.recorder import Recording
 from .nodes.reporting import parse_number, parse_vector
-from .nodes.sim import SimNode
+from .nodes.sim import SIM_BACKENDS, SimNode
 from .nodes.spinning import BackgroundSpin, RclError
 from .nodes.topics import (
     EXECUTOR_NODE,
@@ -61,6 +61,10 @@ from .progress import Progress
 from .recording.bag_writer import BagWriter
 
 SIM_STATUS = f'{SIM_NODE}: arm'
+# The executor's tolerances for an arm under physics (--sim mujoco) [rad]: it stops
+# near its path, not on it, and settles asymptotically (README, "Physics").
+PHYSICS_TOLERANCES = {'arrival_tolerance': 1e-3, 'max_path_offset': 0.02,
+                      'stopped_tolerance': 1e-6}
 INJECTOR_STATUS = f'{INJECTOR_NODE}: drills'
 
 
@@ -82,13 +86,17 @@ class RunReport:
     lock_configuration: np.ndarray | None = None   # (n,) where the arm stopped, locked
     motion: np.ndarray | None = None               # (k, n) recorded joint states
     missed: str = ''           # how the lock missed the drill ('' drilled as asked, or none)
+    contacts: int = 0          # MuJoCo's contacts (--sim mujoco)
+    tracking_error: float = float('nan')   # largest |q - commanded| of a joint (mujoco)
+    standstill_time: float = float('nan')  # lock -> the arm stands (mujoco)
 
 
 class Suite:
     """The four nodes on one MultiThreadedExecutor, spinning in a background thread."""
 
     def __init__(self, scene_file: str, *, speed: float = 2.0, rate: float = 100.0,
-                 drills: Sequence[str] = (), random_drills: int = 0, seed: int = 0,
+                 sim: str = 'kinematic', drills: Sequence[str] = (), random_drills: int = 0,
+                 seed: int = 0,
                  context: Context | None = None, log_level: LoggingSeverity | None = None):
         if log_level is not None:
             for name in (PLANNER_NODE, EXECUTOR_NODE, SIM_NODE, INJECTOR_NODE):
@@ -97,10 +105,12 @@ class Suite:
         self.planner = PlannerNode(context=context, parameter_overrides=common + [
             Parameter('max_joint_speed', value=float(speed))])
         self.executor_node = ExecutorNode(context=context, parameter_overrides=common + [
-            Parameter('max_joint_speed', value=float(speed))])
+            Parameter('max_joint_speed', value=float(speed))] + (
+                [Parameter(name, value=value) for name, value in PHYSICS_TOLERANCES.items()]
+                if sim == 'mujoco' else []))
         self.sim = SimNode(context=context, parameter_overrides=common + [
             Parameter('max_joint_speed', value=2.0 * float(speed)),
-            Parameter('rate', value=float(rate))])
+            Parameter('rate', value=float(rate)), Parameter('sim_backend', value=sim)])
         injector_parameters = common + [Parameter('random_drills', value=int(random_drills)),
                                         Parameter('seed', value=int(seed))]
         if drills:
@@ -183,12 +193,14 @@ class Director:
                 drill = reading.values.get('drill', drill)
         sim = arm.values if arm is not None and arm.values.get('resets') == resets else {}
         collisions = int(sim.get('collisions', '0'))
+        contacts = int(sim.get('contacts', '0'))
         reached = sim.get('goal_reached') == 'True'
-        ok = report.result is Outcome.SUCCEEDED and reached and collisions == 0 and bool(sim)
+        ok = report.result is Outcome.SUCCEEDED and reached and collisions == 0 and \
+            contacts == 0 and bool(sim)
         if report.result is not Outcome.SUCCEEDED:
             why = report.message
-        elif collisions:
-            why = f'{collisions} collision(s)'
+        elif collisions or contacts:
+            why = f'{collisions} collision(s), {contacts} MuJoCo contact(s)'
         elif not reached:
             why = 'the sim did not report the goal reached'
         else:
@@ -204,7 +216,9 @@ class Director:
             parse_number(sim.get('goal_orientation_error_rad')),
             parse_number(sim.get('min_clearance_m')),
             collisions, np.array(parse_vector(lock)) if lock else None,
-            np.array(self.recording) if record and self.recording else None, missed)
+            np.array(self.recording) if record and self.recording else None, missed,
+            contacts, parse_number(sim.get('tracking_error_rad')),
+            parse_number(sim.get('standstill_s')))
 
 
 def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) -> str:
@@ -238,9 +252,23 @@ def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) ->
         lines.append(f'recovery time p50 {np.percentile(recoveries, 50):.2f} s, p95 '
                      f'{np.percentile(recoveries, 95):.2f} s over {len(recoveries)} '
                      'recoveries')
+    lines += physics_figures(runs)
     lines.append(f'{sum(r.ok for r in runs)}/{len(runs)} runs reached the goal without '
                  f'collision{count_drills(runs)}')
     return '\n'.join(lines)
+
+
+def physics_figures(runs: Sequence[RunReport]) -> list[str]:
+    """Say the runs' MuJoCo figures: contacts, tracking error, standstill, clearance."""
+    tracking = [r.tracking_error for r in runs if np.isfinite(r.tracking_error)]
+    if not tracking:
+        return []
+    standstill = [r.standstill_time for r in runs if np.isfinite(r.standstill_time)]
+    clearance = [r.min_clearance for r in runs if np.isfinite(r.min_clearance)]
+    return [f'physics: {sum(r.contacts for r in runs)} MuJoCo contacts, largest tracking '
+            f'error {max(tracking):.4f} rad, standstill after a lock at most '
+            + (f'{max(standstill):.3f} s' if standstill else '-')
+            + f', smallest clearance {min(clearance, default=float("nan")):.4f} m']
 
 
 def count_drills(runs: Sequence[RunReport]) -> str:
@@ -298,6 +326,8 @@ def _parser() -> argparse.ArgumentParser:
                         help='fastest commanded joint speed [rad/s] (2.0)')
     parser.add_argument('--rate', type=float, default=100.0,
                         help='sim rate [Hz] of /joint_states (100)')
+    parser.add_argument('--sim', choices=SIM_BACKENDS, default='kinematic',
+                        help='the sim\'s backend: kinematic (exact) or mujoco (physics)')
     parser.add_argument('--timeout', type=float, default=120.0,
                         help='seconds a run may take (120)')
     parser.add_argument('-v', '--verbose', action='store_true', help='show the nodes\' logs')
@@ -404,7 +434,7 @@ def main(argv: list[str] | None = None) -> int:
         if writer is not None:
             recording = Recording(writer)
         progress.line('starting the planner, executor, sim and injector nodes')
-        suite = Suite(args.scene.resolve(), speed=args.speed, rate=args.rate,
+        suite = Suite(args.scene.resolve(), speed=args.speed, rate=args.rate, sim=args.sim,
                       drills=args.drill, random_drills=args.trials, seed=args.seed,
                       log_level=None if args.verbose else LoggingSeverity.WARN)
         if recording is not None:

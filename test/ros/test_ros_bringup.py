@@ -154,3 +154,17 @@ def test_drills_from_the_sims_default_start_work_when_theta_s_is_on_another_arc(
     code, out, err = bringup.wait(timeout=300)
     assert code == 0, out + err
     assert '2/2 runs reached the goal without collision' in out
+
+
+def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(processes):
+    """--sim mujoco: 2 drills on fig3a and 1 on the Panda shelf, through the real nodes."""
+    shelf = FIG3A.parent / 'panda_shelf.yaml'
+    for scene, drills in ((FIG3A, ['joint2@0.4', 'joint1@0.6']), (shelf, ['panda_joint2@0.5'])):
+        arguments = [part for drill in drills for part in ('--drill', drill)]
+        code, out, err = processes(BRINGUP + ['--scene', scene, '--sim', 'mujoco', *arguments]
+                                   ).wait(timeout=300)
+        assert code == 0, out + err
+        assert f'{len(drills)}/{len(drills)} runs reached the goal without collision' in out
+        physics = next(line for line in out.splitlines() if line.startswith('physics: '))
+        assert physics.startswith('physics: 0 MuJoCo contacts, largest tracking error ')
+        assert 'standstill after a lock at most -' not in physics  # each lock was timed

@@ -11,7 +11,7 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from ftplan_msgs_py import create_joint_trajectory, create_locked_joint, read_joint_state
-from ftplan_ros.core import CollisionChecker, load_scene
+from ftplan_ros.core import CollisionChecker, InputError, load_scene
 from ftplan_ros.nodes.sim import SimNode
 
 NAMES = ['joint1', 'joint2', 'joint3']
@@ -245,3 +245,24 @@ def test_a_lock_angle_away_from_the_joint_is_refused_and_the_arm_stays(ros, angl
                       create_locked_joint('joint1', 2 * np.pi + 0.01))
     wait_for(lambda: [s for s in ros.probe.statuses(STATUS) if s.values['locked'] == 'joint1'])
     wait_for(lambda: abs(last(ros)[0] - 0.01) < 1e-12, what='joint1 locked 0.01 rad on')
+
+
+def test_the_mujoco_backend_reports_efforts_and_its_own_contacts(ros):
+    """sim_backend mujoco: /joint_states carries torques; MuJoCo's contact names the bodies."""
+    ros.make(SimNode, FIG3A, initial_configuration=[0.0, 0.0, 0.0], sim_backend='mujoco')
+    ros.probe.listen(JointState, '/joint_states', 1000)
+    wait_for(lambda: ros.probe.received('/joint_states'))
+    command(ros, [[0.6, 0.0, 0.0]], [1.0])  # link1 turns into fig3a's first disk
+    status = wait_for(lambda: [s for s in ros.probe.statuses(STATUS)
+                               if 'MuJoCo' in s.message])[0]
+    assert status.level == 'ERROR' and int(status.values['contacts']) == 1
+    assert 'contact between link1 and obstacle0' in status.message
+    assert float(status.message.split(', ')[1].split()[0]) > 0.0  # its depth [m]
+    efforts = [msg.effort for msg in ros.probe.received('/joint_states')]
+    assert all(len(effort) == 3 for effort in efforts)
+    assert max(abs(value) for effort in efforts for value in effort) > 1.0  # pushing [Nm]
+
+
+def test_an_unknown_sim_backend_is_refused_naming_the_choices(ros):
+    with pytest.raises(InputError, match=r'sim_backend.*kinematic, mujoco'):
+        ros.make(SimNode, FIG3A, sim_backend='bullet')

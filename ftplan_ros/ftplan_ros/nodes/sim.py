@@ -24,6 +24,12 @@ most `collision_check_step` apart) and reports collisions, the minimum clearance
 arrival at the goal on /diagnostics ('ftplan_sim: arm'). Obstacle updates are applied
 one by one, in order; lost ones are reported as 'ftplan_sim: obstacles' (ERROR,
 obstacle_topic.py): until a full set arrives, the collision checks may miss an obstacle.
+With `sim_backend: mujoco` the arm is simulated by MuJoCo (simulation/mujoco_arm.py):
+position servos with the gains and torque limits of `physics_file` track the commands,
+gravity is on, a lock is a brake, /joint_states carries MuJoCo's positions, velocities
+and torques, and each contact MuJoCo's own collision detection finds is reported on
+/diagnostics with the two bodies and its depth (counted as `contacts`); the arm's
+status adds its largest tracking error and its time to standstill after a lock.
 `~/reset` (std_srvs/Trigger) puts the arm back at its initial configuration, unlocks
 every joint and clears the counters, for repeated drills.
 
@@ -51,6 +57,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import create_joint_state, read_joint_trajectory, time_to_nanoseconds
 from ftplan_ros.core import InputError, Robot, Scene, Task, task_errors
+from ftplan_ros.core.io.files import read_text
 from ftplan_ros.core.model.paths import densify
 from ftplan_ros.core.model.scene import DEFAULT_GOAL_TOLERANCE, DEFAULT_ORIENTATION_TOLERANCE
 from ftplan_ros.core.model.task_space import POINT_SIZE, unit_vector
@@ -58,6 +65,12 @@ from ftplan_ros.simulation.arm import Arm, ArmOptions, Locked, LockOutcome, Refu
 from ftplan_ros.simulation.clearance import ClearanceMonitor
 from ftplan_ros.simulation.initial import default_initial_configuration
 from ftplan_ros.simulation.kinematic import KinematicArm
+from ftplan_ros.simulation.mujoco_arm import MujocoArm
+from ftplan_ros.simulation.mujoco_model import (
+    PhysicsOptions,
+    find_physics_file,
+    read_physics_options,
+)
 
 from .inputs import angle_problem
 from .lock_events import read_lock_event
@@ -66,6 +79,7 @@ from .params import (
     add_validators,
     array_parameter,
     check_startup_parameters,
+    config_path,
     declare,
     declare_array,
     destroyed_if_start_fails,
@@ -87,6 +101,7 @@ from .topics import (
 )
 
 _DEFAULTS = ArmOptions()
+SIM_BACKENDS = ('kinematic', 'mujoco')
 
 
 def task_scene(scene: Scene, kind: str) -> Scene:
@@ -164,7 +179,7 @@ class SimNode(Node):
             self.obstacle_topic = ObstacleTopic(self, self.diagnostics)
             self._obstacles = self.obstacle_topic.obstacles
             self.monitor = ClearanceMonitor(self._obstacles)
-            self.arm: Arm | None = None  # the kinematic one (simulation/kinematic.py)
+            self.arm: Arm | None = None  # of `sim_backend` (simulation/)
             self.initial = np.zeros(0)
             self.resets = 0
             self._clear_counters()
@@ -194,6 +209,13 @@ class SimNode(Node):
         declare(self, 'task_kind', '',
                 'How the goal is judged: position, axis or pose ("" = the scene\'s task '
                 'kind); set it like the planner\'s.', read_only=True)
+        declare(self, 'sim_backend', 'kinematic',
+                'How the arm moves: kinematic (exactly as commanded) or mujoco (physics: '
+                'position servos, gravity, brakes, MuJoCo\'s contacts).', read_only=True)
+        declare(self, 'physics_file', '',
+                'The mujoco backend\'s gains and torque limits (YAML, see '
+                'config/robots/panda_mujoco.yaml; "": the installed *_mujoco.yaml naming '
+                'the robot\'s joints, else the defaults).', read_only=True)
         declare(self, 'brake_on_lock', _DEFAULTS.brake_on_lock,
                 'Stop every joint when one locks, until the next command.')
         declare(self, 'lock_angle_tolerance', _DEFAULTS.lock_angle_tolerance,
@@ -211,6 +233,8 @@ class SimNode(Node):
             'lock_angle_tolerance': positive,
             'goal_tolerance': non_negative, 'orientation_tolerance': non_negative,
             'task_kind': check_task_kind,
+            'sim_backend': lambda value: None if value in SIM_BACKENDS else
+            f'must be one of {", ".join(SIM_BACKENDS)}, got {value!r}',
             'initial_configuration': self._check_configuration,
             'goal': self._check_goal,
         }
@@ -243,12 +267,31 @@ class SimNode(Node):
         given = array_parameter(self, 'initial_configuration')
         self.initial = np.array(given, dtype=float) if given else \
             default_initial_configuration(scene)
-        self.arm = KinematicArm(scene.robot, self.initial, self._arm_options())
+        self.arm = self._new_arm(scene.robot)
         self._clear_counters()
         self.obstacle_topic.report_rebase(problems)
         self._check_clearance(self.arm.q[None, :])
         self.publish_joint_state(np.zeros(len(self.names)))
         self.report('at the initial configuration', log=True)
+
+    def _new_arm(self, robot: Robot) -> Arm:
+        """Return an arm of `sim_backend` at the initial configuration."""
+        if self.get_parameter('sim_backend').value == 'kinematic':
+            return KinematicArm(robot, self.initial, self._arm_options())
+        return MujocoArm(robot, self.initial, self._arm_options(),
+                         self._physics_options(robot), self._obstacles)
+
+    def _physics_options(self, robot: Robot) -> PhysicsOptions:
+        """Read `physics_file` (or the installed one naming the robot's joints, if any)."""
+        given = self.get_parameter('physics_file').value
+        path = given or find_physics_file(config_path('robots', 'panda.yaml').parent,
+                                                robot.joint_names)
+        if not path:
+            self.get_logger().warning('no physics file names the robot\'s joints: '
+                                      'the default gains (simulation/mujoco_model.py)')
+            return PhysicsOptions()
+        self.get_logger().info(f'physics from {path}')
+        return read_physics_options(read_text(path, 'physics_file'), 'physics_file')
 
     def _scene_changed(self, scene: Scene) -> None:
         """Take a robot from /robot_description: the arm starts afresh."""
@@ -370,12 +413,17 @@ class SimNode(Node):
             step = self.arm.step(dt)
             for outcome in step.locks:
                 self._lock_taken(outcome)
+            for contact in step.contacts:
+                self.contacts += 1
+                self.report(f'contact between {contact.first} and {contact.second}, '
+                            f'{contact.depth:.4f} m deep (MuJoCo)', 'ERROR', log=True)
             # From the path, not its end: a command may go out and back within a tick.
             if step.swept is not None and bool(np.any(step.swept != previous)):
                 self._check_clearance(densify(step.swept, self._check_step()))
                 self._reported_stop = False
                 self.goal_reached = False
-            self.publish_joint_state((self.arm.q - previous) / dt)
+            self.publish_joint_state((self.arm.q - previous) / dt if step.velocity is None
+                                     else step.velocity, step.effort)
             if not self.arm.moving and not self._reported_stop:
                 self._reported_stop = True
                 self._report_stop()
@@ -413,21 +461,26 @@ class SimNode(Node):
 
     def _clear_counters(self) -> None:
         self.monitor.clear()
+        self.contacts = 0
         self.goal_reached = False
         self.goal_error = float('nan')
         self.goal_orientation_error = float('nan')
         self._reported_stop = True
         self._last_report = 0.0
 
-    def publish_joint_state(self, velocity: np.ndarray) -> None:
-        """Publish the configuration (lifted, as commanded) and joint velocities [rad/s]."""
-        self.joint_state_publisher.publish(create_joint_state(
-            self.names, self.arm.q, velocity, stamp=self.get_clock().now().to_msg()))
+    def publish_joint_state(self, velocity: np.ndarray, effort: np.ndarray | None = None,
+                            ) -> None:
+        """Publish the configuration (lifted, as commanded), velocities [rad/s], torques [Nm]."""
+        msg = create_joint_state(self.names, self.arm.q, velocity,
+                                 stamp=self.get_clock().now().to_msg())
+        if effort is not None:
+            msg.effort = [float(value) for value in effort]
+        self.joint_state_publisher.publish(msg)
 
     def report(self, message: str, level: str = 'OK', log: bool = False) -> None:
         """Publish the 'arm' status: motion, locks, collisions, clearance, goal."""
         self._last_report = time.monotonic()
-        if level == 'OK' and self.monitor.collisions:
+        if level == 'OK' and (self.monitor.collisions or self.contacts):
             level = 'ERROR'
         values = {
             'state': 'moving' if self.arm.moving else 'stopped',
@@ -440,6 +493,9 @@ class SimNode(Node):
             'goal_error_m': self.goal_error,
             'goal_orientation_error_rad': self.goal_orientation_error,
         }
+        if isinstance(self.arm, MujocoArm):
+            values.update(contacts=self.contacts, tracking_error_rad=self.arm.tracking_error,
+                          standstill_s=self.arm.standstill_time)
         self.diagnostics.report('arm', level, message, values, log=log)
 
 

@@ -5,7 +5,8 @@ The sim node (nodes/sim.py) drives an `Arm` by its own clock: it hands it comman
 (`step`), which returns the path the arm swept and the locks that took effect meanwhile;
 the node checks the sweep for collisions (clearance.py) and publishes the joint states.
 `KinematicArm` (kinematic.py) follows its commands exactly, like a position-controlled
-arm; a physical backend (MuJoCo, issue 37) is to implement the same interface.
+arm; `MujocoArm` (mujoco_arm.py) simulates its dynamics, and its steps say also the
+joints' velocities and torques and the contacts MuJoCo found.
 
 Angles [rad] (lifted: a periodic joint's angle goes on past ±π as commanded), times [s]
 on the sim's clock, stamps ROS time [ns].
@@ -76,12 +77,28 @@ class Refused:
 LockOutcome = Locked | Scheduled | Refused
 
 
+@dataclass(frozen=True)
+class Contact:
+    """Bodies `first` and `second` came into contact, up to `depth` [m] deep (> 0)."""
+
+    first: str
+    second: str
+    depth: float
+
+
 @dataclass(frozen=True, eq=False)
 class Step:
-    """What one step of the arm did: the path it swept (None: it stood) and the locks due."""
+    """What one step of the arm did: the path it swept (None: it stood) and the locks due.
+
+    A physical arm says too how fast its joints move [rad/s] and their torques [Nm]
+    (None: not simulated), and which contacts began.
+    """
 
     swept: np.ndarray | None                       # (k, n) from where it was to where it is
     locks: list[LockOutcome] = field(default_factory=list)
+    velocity: np.ndarray | None = None             # (n,) [rad/s] at the end of the step
+    effort: np.ndarray | None = None               # (n,) [Nm] at the end of the step
+    contacts: list[Contact] = field(default_factory=list)
 
 
 class Arm(Protocol):
