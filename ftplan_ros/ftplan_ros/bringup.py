@@ -192,19 +192,8 @@ class Director:
             if reading.values.get('execution') == str(report.execution):
                 drill = reading.values.get('drill', drill)
         sim = arm.values if arm is not None and arm.values.get('resets') == resets else {}
-        collisions = int(sim.get('collisions', '0'))
-        contacts = int(sim.get('contacts', '0'))
-        reached = sim.get('goal_reached') == 'True'
-        ok = report.result is Outcome.SUCCEEDED and reached and collisions == 0 and \
-            contacts == 0 and bool(sim)
-        if report.result is not Outcome.SUCCEEDED:
-            why = report.message
-        elif collisions or contacts:
-            why = f'{collisions} collision(s), {contacts} MuJoCo contact(s)'
-        elif not reached:
-            why = 'the sim did not report the goal reached'
-        else:
-            why = report.message
+        collisions, contacts = int(sim.get('collisions', '0')), int(sim.get('contacts', '0'))
+        ok, why = _judge(report, sim, collisions, contacts)
         lock = values.get('lock_configuration')
         locked_joint, landed = values.get('locked_joint', ''), report.number('lock_progress')
         missed = parse_drill(drill, None).missed(locked_joint, values.get('lock_phase', ''),
@@ -219,6 +208,23 @@ class Director:
             np.array(self.recording) if record and self.recording else None, missed,
             contacts, parse_number(sim.get('tracking_error_rad')),
             parse_number(sim.get('standstill_s')))
+
+
+def _judge(report, sim: dict, collisions: int, contacts: int) -> tuple[bool, str]:
+    """Whether a run reached the goal without touching anything, and what to say of it.
+
+    `report` is the executor's ExecutionReport, `sim` the sim's last status values.
+    """
+    reached = sim.get('goal_reached') == 'True'
+    ok = report.result is Outcome.SUCCEEDED and reached and collisions == 0 and \
+        contacts == 0 and bool(sim)
+    if report.result is not Outcome.SUCCEEDED:
+        return ok, report.message
+    if collisions or contacts:
+        return ok, f'{collisions} collision(s), {contacts} MuJoCo contact(s)'
+    if not reached:
+        return ok, 'the sim did not report the goal reached'
+    return ok, report.message
 
 
 def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) -> str:
