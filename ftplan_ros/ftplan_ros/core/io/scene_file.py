@@ -36,6 +36,7 @@ from ..model.urdf import chain_from_urdf
 from ..model.urdf_structure import read_urdf
 from ..validation import check_keys, mapping, nonnegative, number, sequence, vector
 from .files import load_yaml, read_text
+from .limits_file import load_joint_limits
 
 # [rad] Widest joint limit: a joint that turns further has no limit (it wraps).
 LARGEST_JOINT_ANGLE = 2.0 * math.pi
@@ -156,7 +157,8 @@ def _planar_robot(data: Mapping) -> PlanarChain:
 
 def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
     check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
-                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf'))
+                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf',
+                          'joint_limits'))
     texts = {}
     for key, kind in (('file', 'URDF'), ('srdf', 'SRDF')):
         if key in data:
@@ -164,11 +166,19 @@ def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
                 raise InputError(f'robot.{key}', f'must be the path of an {kind} file')
             texts[key] = read_text(directory / data[key], f'robot.{key}')
     path = directory / data['file']
-    return robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
-                           data.get('tip_offset', [0.0, 0.0, 0.0]),
-                           data.get('disabled_collisions'),
-                           mesh_dirs=[str(path.parent), str(path.parent.parent)],
-                           srdf=texts.get('srdf')).model
+    model = robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
+                            data.get('tip_offset', [0.0, 0.0, 0.0]),
+                            data.get('disabled_collisions'),
+                            mesh_dirs=[str(path.parent), str(path.parent.parent)],
+                            srdf=texts.get('srdf')).model
+    if 'joint_limits' not in data:
+        return model
+    if not isinstance(data['joint_limits'], str) or not data['joint_limits']:
+        raise InputError('robot.joint_limits', 'must be the path of a joint_limits.yaml file '
+                         '(MoveIt\'s format)')
+    return replace(model, motion_limits=load_joint_limits(
+        directory / data['joint_limits'], model.joint_names, model.motion_limits,
+        'robot.joint_limits'))
 
 
 def _dh_chain(data: Mapping) -> ChainModel:
