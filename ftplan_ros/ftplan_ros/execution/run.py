@@ -15,15 +15,17 @@ import numpy as np
 
 from ftplan_ros.core import FailureSurface, Robot, task_errors
 from ftplan_ros.core.model.angles import configuration_difference, whole_turns
+from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
 
 from .actions import Action, Moment, Stop
 from .command import Command
 from .locks import JointLocks
-from .motion import progress_along, time_path
+from .motion import progress_along
 from .options import ExecutorOptions, Interfaces, Obstacles
 from .recovery import lock_message, with_joints_left, within_surface
 from .state import Execution, ScheduledLock, State
+from .timing import time_within_limits
 from .watchdog import JointStates
 
 
@@ -37,6 +39,9 @@ class Host(Protocol):
     interfaces: Interfaces
     locks: JointLocks
     arm: JointStates
+
+    def commanded_limits(self) -> MotionLimits:
+        """Return the motion limits the commands are timed within (scaled)."""
 
     def given_approach(self, key: str) -> np.ndarray | None:
         """Return the planner's approach (k, n) of plan `key`, if it sent one."""
@@ -176,9 +181,10 @@ class Run:
     def _command(self, path: np.ndarray, now: Moment, lead: float = 0.0) -> bool:
         """Command `path` (k, n), whose first point is where the arm is; False if refused.
 
-        The command starts `lead` [s] after now: its stamp. A path that would move a
-        locked joint is never commanded: the arm is stopped and the run fails instead
-        (that would be a bug of the executor).
+        The command starts `lead` [s] after now: its stamp; it is timed within the
+        host's commanded limits, in steps of at most `max_step` (timing.py). A path that
+        would move a locked joint is never commanded: the arm is stopped and the run fails
+        instead (that would be a bug of the executor).
         """
         moved = self.host.locks.moved(path)
         if moved:
@@ -186,8 +192,9 @@ class Run:
                       'stopped (please report)', now)
             return False
         ex = self.record
-        ex.command = Command(path, time_path(path, self.host.options.max_joint_speed),
-                             now.ros_ns + round(lead * 1e9))
+        timed = time_within_limits(path, self.host.commanded_limits(), self.host.options.max_step)
+        ex.command = Command(timed.positions, timed.times, now.ros_ns + round(lead * 1e9),
+                             timed.velocities, timed.accelerations)
         ex.commanded = now.monotonic
         self.host.emit(ex.command)
         return True
