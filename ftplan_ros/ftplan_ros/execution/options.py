@@ -11,9 +11,9 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from ftplan_ros.core import CollisionChecker
+from ftplan_ros.core.planning.timing import DEFAULT_MAX_STEP
 
 from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE
-from .timing import DEFAULT_MAX_STEP
 
 LONGEST_LEAD = 1.0  # [s] of the nominal path's command: a longer pause would only stall
 

@@ -17,6 +17,7 @@ from ftplan_ros.core import FailureSurface, Robot, task_errors
 from ftplan_ros.core.model.angles import configuration_difference, whole_turns
 from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
+from ftplan_ros.core.planning.timing import braking_speed_scaling, slowed, time_within_limits
 
 from .actions import Action, Moment, Stop
 from .command import Command
@@ -25,7 +26,6 @@ from .motion import progress_along
 from .options import ExecutorOptions, Interfaces, Obstacles
 from .recovery import lock_message, with_joints_left, within_surface
 from .state import Execution, ScheduledLock, State
-from .timing import time_within_limits
 from .watchdog import JointStates
 
 
@@ -163,8 +163,13 @@ class Run:
         return planner.approach(q, theta_s, arrival)
 
     def _begin_nominal(self, now: Moment) -> None:
-        if self._command(self.record.nominal, now, self.host.options.nominal_lead):
-            self.set_state(State.NOMINAL, 'following the nominal path', now)
+        """Command the nominal path, slowed so that a lock anywhere on it brakes certified."""
+        speed = self._command(self.record.nominal, now, self.host.options.nominal_lead,
+                              braking=True)
+        if speed:
+            slower = '' if speed == 1.0 else \
+                f' at {speed:.0%} of its time-optimal speed (the braking after a lock certified)'
+            self.set_state(State.NOMINAL, f'following the nominal path{slower}', now)
 
     def _finish(self, q: np.ndarray, now: Moment) -> None:
         """Done: report the task errors [m, rad] from the plan's goal."""
@@ -178,8 +183,14 @@ class Run:
                                             robot.task_kind in ('axis', 'pose') else '')
         self.set_state(State.DONE, f'reached the goal ({how}), error {error}', now)
 
-    def _command(self, path: np.ndarray, now: Moment, lead: float = 0.0) -> bool:
-        """Command `path` (k, n), whose first point is where the arm is; False if refused.
+    def _command(self, path: np.ndarray, now: Moment, lead: float = 0.0,
+                 braking: bool = False) -> float:
+        """Command `path` (k, n), whose first point is where the arm is; 0 if refused.
+
+        Returns the fraction (0, 1] of the time-optimal speed commanded: with `braking`,
+        the largest at which a lock anywhere on the path brakes, within the commanded
+        accelerations, inside a box certified free (core/planning/timing.py); none
+        certified fails the run.
 
         The command starts `lead` [s] after now: its stamp; it is timed within the
         host's commanded limits, in steps of at most `max_step` (timing.py). A path that
@@ -190,14 +201,22 @@ class Run:
         if moved:
             self.fail(f'refused to command a path that moves locked joint {moved}: the arm is '
                       'stopped (please report)', now)
-            return False
+            return 0.0
         ex = self.record
-        timed = time_within_limits(path, self.host.commanded_limits(), self.host.options.max_step)
+        limits = self.host.commanded_limits()
+        timed = time_within_limits(path, limits, self.host.options.max_step)
+        speed = braking_speed_scaling(self.host.obstacles.checker, timed,
+                                      limits.acceleration) if braking else 1.0
+        if speed <= 0.0:
+            self.fail('no speed of the nominal path is certified to brake clear of the '
+                      'obstacles after a lock: stopped; plan again (with a margin)', now)
+            return 0.0
+        timed = slowed(timed, 1.0 / speed) if speed < 1.0 else timed
         ex.command = Command(timed.positions, timed.times, now.ros_ns + round(lead * 1e9),
                              timed.velocities, timed.accelerations)
         ex.commanded = now.monotonic
         self.host.emit(ex.command)
-        return True
+        return speed
 
     # Locks --------------------------------------------------------------------------
 

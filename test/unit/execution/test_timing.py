@@ -5,7 +5,7 @@ import pytest
 
 from ftplan_ros.core.model.motion_limits import MotionLimits, default_motion_limits
 from ftplan_ros.core.model.paths import point_at_fraction
-from ftplan_ros.execution.timing import time_within_limits
+from ftplan_ros.core.planning.timing import TimedPath, braking_speed_scaling, time_within_limits
 
 from .replay import limit_violations
 from .rig import commands
@@ -81,3 +81,16 @@ def test_every_command_of_a_run_with_a_lock_replays_within_the_limits(make_rig):
         certified = np.asarray(rig.result.nominal_path) if command is nominal else None
         assert limit_violations(command.path, command.velocities, command.accelerations,
                                 command.times, limits, rig.scene.robot.limits, certified) == []
+
+
+def test_the_nominal_command_is_slowed_until_a_lock_on_it_brakes_certified(rig):
+    """Issue 36, item 3: at the full limits the boxes do not certify (speed < 1 below); the
+    command sent does."""
+    limits = rig.executor.commanded_limits()
+    checker = rig.obstacles.checker
+    full = time_within_limits(np.asarray(rig.result.nominal_path), limits)
+    assert braking_speed_scaling(checker, full, limits.acceleration) < 0.9
+    nominal = rig.nominal()
+    sent = TimedPath(nominal.path, nominal.velocities, nominal.accelerations, nominal.times)
+    assert braking_speed_scaling(checker, sent, limits.acceleration) == 1.0
+    assert nominal.times[-1] > full.times[-1]

@@ -15,6 +15,10 @@ checked at the points sent (the published rates and the finite differences a
 controller sees: Δq/Δt, Δv/Δt, Δa/Δt), and slowed down uniformly (time × k scales
 velocity by 1/k, acceleration by 1/k², jerk by 1/k³) until every check holds. The
 trajectory starts at rest at the path's first point and ends at rest at its last.
+
+`braking_speed_scaling` says how much slower a timing must run for every lock on it to
+brake inside a certified box (collision/braking.py): the planner reports it as
+stats['max_safe_speed'], the executor slows the nominal path's command by it.
 """
 
 from __future__ import annotations
@@ -27,8 +31,10 @@ import toppra
 import toppra.algorithm
 import toppra.constraint
 
-from ftplan_ros.core.model.motion_limits import MotionLimits
-from ftplan_ros.core.model.paths import densify
+from ..collision.braking import max_safe_speed, segment_speeds
+from ..collision.checker import CollisionChecker
+from ..model.motion_limits import MotionLimits
+from ..model.paths import densify
 
 DEFAULT_MAX_STEP = 0.05      # [rad] farthest any joint moves between two points
 _RELATIVE_SLACK = 1e-6       # the checks' numerical tolerance, relative to each limit
@@ -97,15 +103,30 @@ def limit_ratios(timed: TimedPath, limits: MotionLimits) -> tuple[float, float, 
     return velocity, acceleration, jerk
 
 
+def slowed(timed: TimedPath, factor: float) -> TimedPath:
+    """Return the same points `factor` (>= 1) times slower: v / factor, a / factor²."""
+    return TimedPath(timed.positions, timed.velocities / factor,
+                     timed.accelerations / factor ** 2, timed.times * factor)
+
+
+def braking_speed_scaling(checker: CollisionChecker, timed: TimedPath,
+                          deceleration: np.ndarray, margin: float = 0.0) -> float:
+    """Return the largest speed scaling (at most 1) whose braking boxes certify on `timed`.
+
+    A lock anywhere on it then brakes, at `deceleration` (n,) [rad/s²], inside a
+    certified box (collision/braking.py). 0 when no speed is certified; 1 when the
+    timing's own speeds are.
+    """
+    speeds = segment_speeds(timed.positions, timed.velocities, timed.times) \
+        if len(timed.times) > 1 else np.zeros((0, timed.positions.shape[1]))
+    return min(1.0, max_safe_speed(checker, timed.positions, speeds, deceleration, margin))
+
+
 def _slowed_to_limits(timed: TimedPath, limits: MotionLimits) -> TimedPath:
     """Stretch time uniformly by the least factor k >= 1 after which every ratio is <= 1."""
     velocity, acceleration, jerk = limit_ratios(timed, limits)
     k = max(velocity, float(np.sqrt(acceleration)), float(np.cbrt(jerk)))
-    if k <= 1.0:
-        return timed
-    k *= 1.0 + _RELATIVE_SLACK
-    return TimedPath(timed.positions, timed.velocities / k, timed.accelerations / k ** 2,
-                     timed.times * k)
+    return timed if k <= 1.0 else slowed(timed, k * (1.0 + _RELATIVE_SLACK))
 
 
 def _ratio(values: np.ndarray, limit: np.ndarray) -> float:
