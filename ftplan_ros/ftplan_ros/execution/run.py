@@ -14,6 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from ftplan_ros.core import FailureSurface, Robot, task_errors
+from ftplan_ros.core.collision.braking import lock_point, segment_speeds
 from ftplan_ros.core.model.angles import configuration_difference, whole_turns
 from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
@@ -215,6 +216,8 @@ class Run:
         ex.command = Command(timed.positions, timed.times, now.ros_ns + round(lead * 1e9),
                              timed.velocities, timed.accelerations)
         ex.commanded = now.monotonic
+        if braking:
+            ex.nominal_command, ex.braking = ex.command, limits.acceleration
         self.host.emit(ex.command)
         return speed
 
@@ -268,15 +271,31 @@ class Run:
         if ex.lock_phase == State.APPROACHING:
             way = with_joints_left(self._planner(), ex, q, name)
         else:
-            ex.lock_progress, _ = progress_along(ex.nominal, q)
+            start = self._lock_point(q)
+            ex.lock_progress, _ = progress_along(ex.nominal, start)
             ex.progress = ex.lock_progress
-            way = within_surface(ex, q, name, options.max_path_offset)
+            way = within_surface(ex, q, start, name, options.max_path_offset)
         if way.path is None:
             self.fail(way.message, now)  # the arm stands still: keep it so
             return
         ex.recovery_length = way.length
         if self._command(way.path, now):
             self.set_state(State.RECOVERING, way.message, now, level=way.level)
+
+    def _lock_point(self, q: np.ndarray) -> np.ndarray:
+        """Return where on the nominal path the arm, stopped at q (n,), braked from.
+
+        The point of the locked joint's angle whose certified braking box holds q
+        (core/collision/braking.py); q itself when none does (the arm stopped on the path,
+        or off every box: recovery then refuses it).
+        """
+        ex = self.record
+        sent = ex.nominal_command
+        if sent is None or len(sent.path) < 2:
+            return q
+        speeds = segment_speeds(sent.path, sent.velocities, sent.times)
+        p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint)
+        return q if p is None else p
 
     # Obstacles ----------------------------------------------------------------------
 

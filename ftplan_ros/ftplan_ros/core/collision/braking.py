@@ -89,3 +89,33 @@ def _scaling(room: np.ndarray, braking: np.ndarray) -> float:
     with np.errstate(divide='ignore'):
         squared = np.where(braking > 0.0, room / braking, np.inf)
     return float(np.sqrt(np.min(squared)))
+
+
+def lock_point(positions: np.ndarray, speeds: np.ndarray, deceleration: np.ndarray,
+               q: np.ndarray, joint: int) -> np.ndarray | None:
+    """Return where on the path (k, n) the arm braked to q (n,) from, with `joint` locked.
+
+    The point p of the path with p[joint] = q[joint] whose segment's braking box
+    (`max_safe_speed`: the segment widened by d of its `speeds` (k-1, n) at
+    `deceleration`) holds q, the nearest to q; None if no box holds q. The straight move
+    from q back to p lies in that box: certified when the box is.
+    """
+    a, b = positions[:-1], positions[1:]
+    reach = braking_distances(np.asarray(speeds, dtype=float), deceleration)
+    inside = np.all((q >= np.minimum(a, b) - reach) & (q <= np.maximum(a, b) + reach), axis=1)
+    best, nearest = None, np.inf
+    for k in np.flatnonzero(inside):
+        rise = b[k, joint] - a[k, joint]
+        if rise == 0.0:
+            share = 0.0 if a[k, joint] == q[joint] else None
+        else:
+            share = (q[joint] - a[k, joint]) / rise
+            share = share if 0.0 <= share <= 1.0 else None
+        if share is None:
+            continue
+        p = a[k] + share * (b[k] - a[k])
+        p[joint] = q[joint]
+        gap = float(np.max(np.abs(q - p)))
+        if gap < nearest:
+            best, nearest = p, gap
+    return best
