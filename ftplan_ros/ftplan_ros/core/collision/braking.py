@@ -46,7 +46,7 @@ def segment_speeds(positions: np.ndarray, velocities: np.ndarray, times: np.ndar
 
 def max_safe_speed(checker: CollisionChecker, positions: np.ndarray, speeds: np.ndarray,
                    deceleration: np.ndarray, margin: float = 0.0, max_depth: int = 6,
-                   ) -> float:
+                   cap: float = np.inf) -> float:
     """Return the largest speed scaling s >= 0 whose braking boxes certify along the path.
 
     `positions` (k, n) [rad] is the path, `speeds` (k-1, n) [rad/s] bounds its joints'
@@ -54,7 +54,8 @@ def max_safe_speed(checker: CollisionChecker, positions: np.ndarray, speeds: np.
     braking. Run at s times its speeds (s < 1: slower), every lock brakes inside a box
     clear by more than `margin` [m]. A segment not clear enough for itself is halved, up
     to `max_depth` times; if it still is not, 0 (no speed is certified). inf when nothing
-    moves.
+    moves. Scalings above `cap` need no exact answer: the clearance is measured only as
+    far as `cap` needs (checker.py `needed`), and any result >= `cap` stands for all.
     """
     positions = np.asarray(positions, dtype=float)
     if len(positions) < 2:
@@ -65,9 +66,11 @@ def max_safe_speed(checker: CollisionChecker, positions: np.ndarray, speeds: np.
     best = np.inf
     for depth in range(max_depth + 1):
         centres = 0.5 * (low + high)
-        clearance = checker.clearance(centres)
-        room = clearance - margin - _ROUNDING - (0.5 * np.abs(high - low)) @ arms.T  # (S, C)
+        segment = (0.5 * np.abs(high - low)) @ arms.T                                 # (S, C)
         braking = reach @ arms.T                                                      # (S, C)
+        needed = margin + _ROUNDING + segment + min(cap, 1e6) ** 2 * braking
+        clearance = checker.clearance(centres, needed=needed)
+        room = clearance - margin - _ROUNDING - segment
         tight = np.any(~(room > 0.5 * (clearance - margin - _ROUNDING)), axis=1)
         if depth < max_depth and np.any(tight):
             ok = ~tight

@@ -119,7 +119,8 @@ def braking_speed_scaling(checker: CollisionChecker, timed: TimedPath,
     """
     speeds = segment_speeds(timed.positions, timed.velocities, timed.times) \
         if len(timed.times) > 1 else np.zeros((0, timed.positions.shape[1]))
-    return min(1.0, max_safe_speed(checker, timed.positions, speeds, deceleration, margin))
+    return min(1.0, max_safe_speed(checker, timed.positions, speeds, deceleration, margin,
+                                   cap=1.0))
 
 
 def _slowed_to_limits(timed: TimedPath, limits: MotionLimits) -> TimedPath:
