@@ -168,14 +168,15 @@ class Director:
         mark = client.status_mark
         try:
             report = client.execute(self.motion, timeout=timeout)
+            # The executor may finish before the sim has stopped: record until it has.
+            arm = client.wait_for_status(
+                SIM_STATUS, lambda v: v.get('resets') == resets and v.get('state') == 'stopped'
+                and v.get('goal_reached') == 'True', 2.0 if report.result is Outcome.SUCCEEDED
+                else 0.0, mark) or client.status(SIM_STATUS)
         finally:
             client.spin_until(lambda: False, 0.05)  # the last joint states of the run
             self._record = False
         values = report.values
-        arm = client.wait_for_status(
-            SIM_STATUS, lambda v: v.get('resets') == resets and v.get('state') == 'stopped'
-            and v.get('goal_reached') == 'True', 2.0 if report.result is Outcome.SUCCEEDED
-            else 0.0, mark) or client.status(SIM_STATUS)
         drill = ''
         for reading in client.statuses(INJECTOR_STATUS, mark):
             if reading.values.get('execution') == str(report.execution):

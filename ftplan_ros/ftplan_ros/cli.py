@@ -81,6 +81,14 @@ def _parser() -> argparse.ArgumentParser:
     _planner_arguments(figure)
     figure.set_defaults(run=_figure_command)
 
+    _add_bench_command(commands)
+    _add_study_command(commands)
+    _add_replay_command(commands)
+    return parser
+
+
+def _add_bench_command(commands) -> None:
+    """Add `ftplan bench`: the planner timed against a baseline in one run."""
     bench = commands.add_parser('bench', help='time the planner against a baseline in one run')
     bench.add_argument('--robot', default='planar3r', choices=('planar3r', 'panda', 'iiwa14'),
                        help='planar3r (the paper\'s arm, recall against a reference grid) or a '
@@ -101,6 +109,9 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument('--json', type=Path, help='write every measurement here')
     bench.set_defaults(run=_bench_command)
 
+
+def _add_study_command(commands) -> None:
+    """Add `ftplan study`: a map or sweep of many tasks on Dask."""
     study = commands.add_parser('study', help='plan a map or a sweep of many tasks on Dask')
     study.add_argument('spec', type=Path, help='study spec YAML (scene, vary, planner, chunk)')
     study.add_argument('--out', type=Path, required=True,
@@ -111,6 +122,9 @@ def _parser() -> argparse.ArgumentParser:
                        help='worker processes of the local cluster (default: one per CPU)')
     study.set_defaults(run=_study_command)
 
+
+def _add_replay_command(commands) -> None:
+    """Add `ftplan replay`: the summary and figure of a bringup recording."""
     replay = commands.add_parser('replay', help='summarise a recording of ftplan-bringup '
                                  '(as ros2 bag info does) and draw its run')
     replay.add_argument('recording', type=Path, help='an MCAP file of ftplan-bringup --record')
@@ -119,7 +133,6 @@ def _parser() -> argparse.ArgumentParser:
     replay.add_argument('--scene', type=Path, help='the scene of the run (default: the scene '
                         'file the recording names)')
     replay.set_defaults(run=_replay_command)
-    return parser
 
 
 def _planner_arguments(parser: argparse.ArgumentParser) -> None:

@@ -6,11 +6,13 @@ by: the executor's status 'ftplan_executor: execution' on /diagnostics for each 
 outcome), the injector's 'ftplan_injector: drills' (the drill armed for each execution),
 the arm on /joint_states, and the plan's status on /ftplan/plan/info (the digest of the
 robot it was made for). `recorded_runs` cuts the joint states into runs, one per
-execution, from its first status to its last (done or failed), and makes the bringup's
-RunReport of each; `draw_recorded_run` draws one with the bringup's own choice and
-drawing (`pick_run_to_draw`, `write_motion_png`): one drawing path, fed live or from the
-file. The scene comes from the recording's 'ftplan' metadata (the scene file of the run)
-or from the caller, and must be of the recorded robot.
+execution, as the live bringup records them: from the sim's reset before it (or its
+first status) until the sim reports the arm stopped after its last status (done or
+failed), and makes the bringup's RunReport of each; `draw_recorded_run` draws one with
+the bringup's own choice and drawing (`pick_run_to_draw`, `write_motion_png`): one
+drawing path, fed live or from the file. The scene comes from the recording's 'ftplan'
+metadata (the scene file of the run) or from the caller, and must be of the recorded
+robot.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import numpy as np
 
 from ftplan_msgs_py import read_diagnostic_status, read_joint_state
 
-from ..bringup import RunReport, pick_run_to_draw, write_motion_png
+from ..bringup import SIM_STATUS, RunReport, pick_run_to_draw, write_motion_png
 from ..core import InputError, Scene, load_scene
 from ..core.model.robot import robot_digest
 from ..nodes.plan_info import PLANNER_STATUS
@@ -43,6 +45,8 @@ class _Execution:
     number: str
     start: int
     end: int | None = None
+    resets: str | None = None                      # the sim's resets during the execution
+    stopped: int | None = None                     # the sim's first 'stopped' after `end`
     values: dict = field(default_factory=dict)
     message: str = ''
     drill: str = ''
@@ -76,10 +80,11 @@ def recorded_scene(bag: Bag, scene_file: str | Path | None = None) -> Scene:
 def recorded_runs(bag: Bag, joint_names: list[str]) -> list[RunReport]:
     """Return a RunReport per recorded execution, numbered from 1, with its joint motion.
 
-    The motion (k, n) [rad] is every joint state from the execution's first status to
-    its last (or to the end of the recording), ordered as `joint_names`.
+    The motion (k, n) [rad] is every joint state from the sim's reset before the
+    execution (or its first status) until the sim stopped after its last status (or the
+    end of the recording), ordered as `joint_names`: the window the live bringup records.
     """
-    executions, drills, states = {}, {}, []
+    timeline, states = _Timeline(), []
     for recorded in bag.messages([DIAGNOSTICS, JOINT_STATES]):
         if recorded.topic == JOINT_STATES:
             try:
@@ -89,11 +94,11 @@ def recorded_runs(bag: Bag, joint_names: list[str]) -> list[RunReport]:
                 pass  # another arm's, or malformed: the live bringup skips them too
             continue
         for status in recorded.message.status:
-            _take_status(status, recorded.log_time, executions, drills)
+            timeline.take(status, recorded.log_time)
     runs = []
-    for index, ex in enumerate(executions.values(), start=1):
-        ex.drill = drills.get(ex.number, '')
-        end = ex.end if ex.end is not None else float('inf')
+    for index, ex in enumerate(timeline.executions.values(), start=1):
+        ex.drill = timeline.drills.get(ex.number, '')
+        end = next((t for t in (ex.stopped, ex.end) if t is not None), float('inf'))
         motion = [q for t, q in states if ex.start <= t <= end]
         runs.append(_report(index, ex, np.array(motion) if motion else None))
     return runs
@@ -116,22 +121,49 @@ def describe_run(run: RunReport) -> str:
             f'{"reached" if run.ok else "FAILED"} ({run.message})')
 
 
-def _take_status(status, log_time: int, executions: dict, drills: dict) -> None:
-    """Note an executor or injector status of /diagnostics in `executions` or `drills`."""
-    try:
-        reading = read_diagnostic_status(status)
-    except ValueError:
-        return
-    number = reading.values.get('execution')
-    if reading.name == DRILLS_STATUS and number and reading.values.get('drill'):
-        drills[number] = reading.values['drill']
-    if reading.name != EXECUTION_STATUS or not number:
-        return
-    ex = executions.setdefault(number, _Execution(number, log_time))
-    if ex.end is None:
-        ex.values, ex.message = dict(reading.values), reading.message
-        if reading.values.get('state') in _FINAL_STATES:
-            ex.end = log_time
+class _Timeline:
+    """The executions, drills and sim resets of a recording's /diagnostics, in log order."""
+
+    def __init__(self):
+        self.executions: dict[str, _Execution] = {}
+        self.drills: dict[str, str] = {}
+        self._resets: str | None = None
+        self._reset_time: int | None = None
+
+    def take(self, status, log_time: int) -> None:
+        """Note one status of /diagnostics received at `log_time` [ns since the epoch]."""
+        try:
+            reading = read_diagnostic_status(status)
+        except ValueError:
+            return
+        values, number = reading.values, reading.values.get('execution')
+        if reading.name == SIM_STATUS:
+            self._take_sim(values, log_time)
+        elif reading.name == DRILLS_STATUS and number and values.get('drill'):
+            self.drills[number] = values['drill']
+        elif reading.name == EXECUTION_STATUS and number:
+            ex = self.executions.setdefault(
+                number, _Execution(number, self._reset_time or log_time, resets=self._resets))
+            if ex.end is None:
+                ex.values, ex.message = dict(values), reading.message
+                if values.get('state') in _FINAL_STATES:
+                    ex.end = log_time
+
+    def _take_sim(self, values: dict, log_time: int) -> None:
+        """Note the sim's resets (where a run's motion starts) and stops (where it ends).
+
+        A run ends where the sim, not yet reset again, first reports the arm stopped
+        after the run's last status; at its next reset, at that last status.
+        """
+        resets = values.get('resets')
+        for ex in self.executions.values():
+            if ex.end is not None and ex.stopped is None:
+                if resets != ex.resets:
+                    ex.stopped = ex.end
+                elif values.get('state') == 'stopped':
+                    ex.stopped = log_time
+        if resets != self._resets:
+            self._resets, self._reset_time = resets, log_time
 
 
 def _report(index: int, ex: _Execution, motion: np.ndarray | None) -> RunReport:
