@@ -49,6 +49,13 @@ def test_scaling_slows_the_trajectory_down():
     assert problems == [] and slow.times[-1] > 1.5 * fast.times[-1]
 
 
+def test_a_path_of_one_short_step_is_timed_too():
+    """An approach of 2 points 0.012 rad apart was timed 1e298 s long (no grid point
+    between its ends at rest)."""
+    timed, problems = replayed(np.array([[0.0, 0.0, 0.0], [0.012, -0.004, 0.0]]), PANDA_LIKE)
+    assert problems == [] and 0.0 < timed.times[-1] < 1.0
+
+
 def test_a_path_of_one_point_is_a_command_to_stay():
     timed, problems = replayed(ZIGZAG[:1], PANDA_LIKE)
     assert problems == [] and timed.times.tolist() == [0.0]

@@ -39,6 +39,7 @@ from ..model.paths import densify
 DEFAULT_MAX_STEP = 0.05      # [rad] farthest any joint moves between two points
 _RELATIVE_SLACK = 1e-6       # the checks' numerical tolerance, relative to each limit
 _SHORTEST = 1e-12            # [rad] points closer than this are one point
+_FEWEST_STEPS = 8            # grid intervals of the shortest path
 
 logging.getLogger('toppra').setLevel(logging.WARNING)
 
@@ -59,7 +60,12 @@ class TimedPath:
 def time_within_limits(path: np.ndarray, limits: MotionLimits, max_step: float = DEFAULT_MAX_STEP,
               ) -> TimedPath:
     """Time the polyline `path` (k, n) [rad] within `limits` (see the module docstring)."""
-    points = _distinct(densify(np.asarray(path, dtype=float), max_step))
+    path = np.asarray(path, dtype=float)
+    # TOPP-RA starts and ends at rest on grid points: a path of one step would get no
+    # speed at all, so every path gets at least _FEWEST_STEPS.
+    span = float(np.sum(np.max(np.abs(np.diff(path, axis=0)), axis=1))) if len(path) > 1 else 0.0
+    step = min(max_step, span / _FEWEST_STEPS) if span > 0.0 else max_step
+    points = _distinct(densify(path, step))
     n = points.shape[1]
     if len(points) < 2:
         zero = np.zeros((1, n))
@@ -77,6 +83,8 @@ def time_within_limits(path: np.ndarray, limits: MotionLimits, max_step: float =
     if sd is None:
         raise RuntimeError('TOPP-RA found no timing of the path within the limits')
     sd = np.maximum(np.asarray(sd, dtype=float), 0.0)
+    if not np.all(sd[1:-1] > 0.0):
+        raise RuntimeError('TOPP-RA stops the path between its ends')
     sdd = np.append(np.asarray(sdd, dtype=float), 0.0)
     steps = 2.0 * np.diff(ss) / np.maximum(sd[:-1] + sd[1:], 1e-300)
     times = np.concatenate([[0.0], np.cumsum(steps)])
