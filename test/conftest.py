@@ -4,6 +4,14 @@ import numpy as np
 import pytest
 
 
+@pytest.fixture(autouse=True, scope='session')
+def _cache_folder(tmp_path_factory):
+    """Keep the tests' cache entries (sampled self-collision exceptions) out of the user's."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv('FTPLAN_CACHE_DIR', str(tmp_path_factory.mktemp('cache')))
+        yield
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

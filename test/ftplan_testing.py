@@ -11,6 +11,7 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+import yaml
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -133,6 +134,60 @@ def write_binary_stl(path: Path, vertices: np.ndarray, faces: np.ndarray) -> Non
             out.write(struct.pack('<12fH', *normal, *a, *b, *c, 0))
 
 
+def write_obj(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """Write a triangle mesh as a Wavefront OBJ file (1-based face indices)."""
+    lines = [f'v {x:.17g} {y:.17g} {z:.17g}' for x, y, z in np.asarray(vertices, dtype=float)]
+    lines += [f'f {a + 1} {b + 1} {c + 1}' for a, b, c in faces]
+    path.write_text('# ftplan test mesh\n' + '\n'.join(lines) + '\n')
+
+
+def write_collada(path: Path, vertices: np.ndarray, faces: np.ndarray, unit: float = 1.0) -> None:
+    """Write a triangle mesh as a COLLADA file whose coordinates are in units of `unit` [m]."""
+    numbers = ' '.join(f'{v:.17g}' for v in (np.asarray(vertices, dtype=float) / unit).ravel())
+    indices = ' '.join(str(k) for k in np.asarray(faces).ravel())
+    path.write_text(f'''<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="unit" meter="{unit:g}"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="m"><mesh>
+    <source id="p"><float_array id="pa" count="{3 * len(vertices)}">{numbers}</float_array>
+      <technique_common><accessor source="#pa" count="{len(vertices)}" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="{len(faces)}"><input semantic="VERTEX" source="#v" offset="0"/>
+      <p>{indices}</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#m"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+''')
+
+
+def write_mesh(path: Path, vertices: np.ndarray, faces: np.ndarray) -> Path:
+    """Write a triangle mesh in the format its suffix names (.stl, .obj, .dae); return `path`."""
+    {'.stl': write_binary_stl, '.obj': write_obj, '.dae': write_collada}[path.suffix](
+        path, vertices, faces)
+    return path
+
+
+def convex_hull(points: int = 152, axes=(0.06, 0.04, 0.1)):
+    """A convex mesh of 2 * points - 4 triangles (300 for 152 points) [m], faces outward.
+
+    Its vertices lie on an ellipsoid of semi-axes `axes`, spread as a Fibonacci lattice.
+    """
+    from scipy.spatial import ConvexHull
+    k = np.arange(points) + 0.5
+    polar, azimuth = np.arccos(1.0 - 2.0 * k / points), np.pi * (1.0 + 5.0 ** 0.5) * k
+    vertices = np.stack([np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth),
+                         np.cos(polar)], axis=1) * np.asarray(axes)
+    faces = ConvexHull(vertices).simplices
+    corners = vertices[faces]
+    outward = np.einsum('ij,ij->i', np.cross(corners[:, 1] - corners[:, 0],
+                                             corners[:, 2] - corners[:, 0]), corners[:, 0]) > 0
+    return vertices, np.where(outward[:, None], faces, faces[:, ::-1])
+
+
 # A 4-joint arm with what URDFs have: a continuous joint, an axis not along x, y or z,
 # fixed joints folded in (a bracket with a sphere, the TCP), a finger on a prismatic joint
 # off the chain, and a link whose collision geometry is a mesh (scaled).
@@ -215,6 +270,79 @@ def bot(urdf: Path, task_kind: str = 'position'):
     from ftplan_ros.core.io.scene_file import robot_from_urdf
     return robot_from_urdf(urdf.read_text(), 'tcp', tip_offset=BOT_TIP_OFFSET,
                            mesh_dirs=[str(urdf.parent)], task_kind=task_kind)
+
+
+# A 4-joint arm as a CAD export gives it: its links are cylinders, and `upper` and `fore`
+# meet end to end on the axes of `pitch` and `roll` (two links apart, the `knuckle` between
+# them). The joint sits 1 µm beyond the end of `upper` (the export's rounding): straight,
+# the two are that far apart; any turn of pitch or roll sinks the rim of `fore` into
+# `upper`, so every configuration but the straight one collides unless that pair is exempt.
+CAD_ARM_GAP = 1e-6  # [m]
+CAD_ARM = f'''<robot name="cad_arm">
+  <link name="base">
+    <collision><origin xyz="0 0 0.05"/>
+      <geometry><cylinder radius="0.08" length="0.1"/></geometry></collision>
+  </link>
+  <joint name="yaw" type="revolute">
+    <parent link="base"/><child link="upper"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 0 1"/><limit lower="-2.5" upper="2.5" effort="1" velocity="1"/>
+  </joint>
+  <link name="upper">
+    <collision><origin xyz="0.1 0 0.15"/>
+      <geometry><cylinder radius="0.05" length="0.3"/></geometry></collision>
+  </link>
+  <joint name="pitch" type="revolute">
+    <parent link="upper"/><child link="knuckle"/><origin xyz="0.1 0 {0.3 + CAD_ARM_GAP}"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="knuckle">
+    <collision><origin rpy="1.5707963267948966 0 0"/>
+      <geometry><cylinder radius="0.03" length="0.14"/></geometry></collision>
+  </link>
+  <joint name="roll" type="revolute">
+    <parent link="knuckle"/><child link="fore"/><origin xyz="0 0 0"/>
+    <axis xyz="1 0 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="fore">
+    <collision><origin xyz="0 0 0.15"/>
+      <geometry><cylinder radius="0.05" length="0.3"/></geometry></collision>
+  </link>
+  <joint name="wrist" type="revolute">
+    <parent link="fore"/><child link="hand"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 1 0"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/>
+  </joint>
+  <link name="hand">
+    <collision><origin xyz="0 0 0.1"/>
+      <geometry><cylinder radius="0.04" length="0.2"/></geometry></collision>
+  </link>
+  <joint name="tip_joint" type="fixed">
+    <parent link="hand"/><child link="tip"/><origin xyz="0 0 0.2"/>
+  </joint>
+  <link name="tip"/>
+</robot>
+'''
+CAD_ARM_TASK = {'start': [0.45, 0.1, 0.55], 'goal': [0.35, -0.25, 0.45], 'goal_tolerance': 0.005}
+# The CAD arm with `upper` 3 cm shorter, its joints where they were: `upper` and `fore`
+# touch in 91 % of random configurations, too few for MoveIt's sampling to exempt them,
+# and in every start configuration of CAD_ARM_TASK. CAD_ARM_SRDF exempts every pair, as
+# MoveIt's setup assistant writes them (adjacent, never touching) plus that one.
+CAD_ARM_SHORT_UPPER = CAD_ARM.replace(
+    '<origin xyz="0.1 0 0.15"/>\n      <geometry><cylinder radius="0.05" length="0.3"/>',
+    '<origin xyz="0.1 0 0.135"/>\n      <geometry><cylinder radius="0.05" length="0.27"/>')
+_CAD_ARM_LINKS = ('base', 'upper', 'knuckle', 'fore', 'hand')
+CAD_ARM_SRDF = '<robot name="cad_arm">{}</robot>'.format(''.join(
+    f'<disable_collisions link1="{a}" link2="{b}" reason="User"/>'
+    for k, a in enumerate(_CAD_ARM_LINKS) for b in _CAD_ARM_LINKS[k + 1:]))
+
+
+def write_cad_arm(directory: Path, **robot) -> Path:
+    """Write the CAD arm's URDF and a scene of it (a position task; `robot`: more keys)."""
+    (directory / 'cad_arm.urdf').write_text(CAD_ARM)
+    scene = {'robot': {'type': 'urdf', 'file': 'cad_arm.urdf', 'base_link': 'base',
+                       'tip_link': 'tip', **robot}, 'task': CAD_ARM_TASK}
+    path = directory / 'cad_arm.yaml'
+    path.write_text(yaml.safe_dump(scene))
+    return path
 
 
 def slice_distance(surface, joint, theta):

@@ -186,14 +186,14 @@ def test_obstacles_add_to_the_scene_and_malformed_markers_keep_the_previous_ones
                              type=Marker.LINE_STRIP, action=Marker.ADD),
     }
     for marker in malformed.values():
-        before = len(ros.probe.logged('ftplan_planner', 'keeping the 1 previous'))
+        before = len(ros.probe.logged('ftplan_planner', 'holding the 1 previous'))
         ros.probe.publish(MarkerArray, '/ftplan/obstacles', MarkerArray(markers=[marker]),
                           LATCHED_QOS)
         wait_for(lambda b=before: len(ros.probe.logged('ftplan_planner',
-                                                       'keeping the 1 previous')) > b)
+                                                       'holding the 1 previous')) > b)
     response = ros.probe.call(GetPlan, '/ftplan/plan', request())
-    assert response.plan.poses == []       # the obstacle over the base is still there
-    wait_for(lambda: 'covers the robot base' in ros.probe.statuses(STATUS)[-1].message)
+    assert response.plan.poses == []       # refused: the set is not the one published
+    wait_for(lambda: 'an obstacle update was refused' in ros.probe.statuses(STATUS)[-1].message)
 
     ros.probe.publish(MarkerArray, '/ftplan/obstacles', MarkerArray(
         markers=[Marker(action=Marker.DELETEALL)]), LATCHED_QOS)

@@ -51,6 +51,21 @@ BRINGUP_TOPICS = {
 PLAN_TOPICS = [topic for topic in BRINGUP_TOPICS if topic.startswith('/ftplan/plan/')]
 
 
+# [0..255 RMS] Two subscribers of /joint_states (the bringup's and the recorder's) may
+# receive different samples under load (a reliable KEEP_LAST publisher drops what a
+# starved reader has not taken), which moves the snapshots by a pixel or so: RMS 3.2 was
+# seen at load 15. Another run of the scene differs in size or far more.
+SAME_RUN_RMS = 5.0
+
+
+def figures_match(replayed: Path, live: Path) -> bool:
+    """Whether two PNGs are the same figure: equal sizes, RMS difference <= SAME_RUN_RMS."""
+    a, b = imread(replayed), imread(live)
+    if a.shape != b.shape:
+        return False
+    return float(np.sqrt(np.mean((255.0 * (a - b)) ** 2))) <= SAME_RUN_RMS
+
+
 def test_the_recorder_writes_each_message_once_latched_ones_too_with_the_offered_qos(
         ros, tmp_path):
     probe = ros.probe
@@ -190,7 +205,7 @@ def test_a_recorded_drill_holds_every_topic_in_time_order_and_replays_to_the_liv
     assert code == 0, out + err
     assert f'Messages:          {total}\n' in out
     assert 'run 1: joint2@0.4, joint2 locked at 40.0% of the nominal path' in out
-    assert np.array_equal(imread(replayed), imread(live))  # one drawing, the same run
+    assert figures_match(replayed, live)  # one drawing, the same run
     code, out, err = processes([BIN / 'ftplan', 'replay', recording, '--png', replayed,
                                 '--scene', SCENES / 'panda_shelf.yaml']).wait(timeout=300)
     assert code == 2 and err.strip().splitlines() == [

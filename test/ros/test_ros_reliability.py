@@ -64,9 +64,12 @@ def marker(kind: int, x: float, scale: float, key: int) -> Marker:
                   scale=Vector3(x=scale, y=scale, z=scale))
 
 
-def test_markers_beyond_every_bound_are_ignored_and_plans_keep_the_last_good_obstacles(ros):
+def test_markers_beyond_every_bound_are_refused_and_plans_wait_for_a_full_set(ros):
     """Rows 1 and 4: a sphere at 1e200 (radius 1e200) served a plan through it; a cube or
-    cylinder at 1e155 made every plan fail with a matmul error until the obstacles changed."""
+    cylinder at 1e155 made every plan fail with a matmul error until the obstacles changed.
+    Review of issue 33: an array refused whole left the set 'complete', so a plan was
+    served for a goal that the refused array covered; now the set the node holds is not
+    the one published until a full set (DELETEALL first) arrives."""
     ros.make(PlannerNode)
     good = plan_ok(ros)
     for kind, x, scale in [(Marker.SPHERE, 1e200, 2e200), (Marker.CUBE, 1e155, 1.0),
@@ -75,11 +78,21 @@ def test_markers_beyond_every_bound_are_ignored_and_plans_keep_the_last_good_obs
         ros.probe.publish(MarkerArray, '/ftplan/obstacles',
                           MarkerArray(markers=[marker(kind, x, scale, kind)]), LATCHED_QOS)
         status = wait_for(lambda b=before: ros.probe.statuses('ftplan_planner: obstacles')[b:])
-        assert status[0].level == 'WARN' and 'ignored obstacle markers' in status[0].message
+        assert status[0].level == 'ERROR' and 'ignored obstacle markers' in status[0].message
         assert 'obstacle.center: must be finite and within ±1e+06' in status[0].message
-        again = plan_ok(ros)
-        assert len(again.plan.poses) == len(good.plan.poses)
-        assert status_of(ros, again).values['obstacles'] == '3'   # the static ones only
+        assert status[0].values['complete'] == 'False'
+        refused = ros.probe.call(GetPlan, '/ftplan/plan', request())
+        assert refused.plan.poses == []
+        assert 'an obstacle update was refused (obstacle.center' in \
+            status_of(ros, refused).message
+    before = len(ros.probe.statuses('ftplan_planner: obstacles'))
+    ros.probe.publish(MarkerArray, '/ftplan/obstacles',
+                      MarkerArray(markers=[Marker(action=Marker.DELETEALL)]), LATCHED_QOS)
+    status = wait_for(lambda: ros.probe.statuses('ftplan_planner: obstacles')[before:])
+    assert status[0].level == 'OK' and status[0].values['complete'] == 'True'
+    again = plan_ok(ros)
+    assert len(again.plan.poses) == len(good.plan.poses)
+    assert status_of(ros, again).values['obstacles'] == '3'   # the static ones only
 
 
 def test_a_thousand_cubes_out_of_reach_leave_the_plan_as_it_was(ros):

@@ -10,6 +10,7 @@ import time
 
 import pytest
 from descriptions import CYCLE_JOINT, PANDA_SRDF, PANDA_URDF, heavy_panda, panda_with
+from ftplan_testing import CAD_ARM_SHORT_UPPER, CAD_ARM_SRDF, CAD_ARM_TASK
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.srv import GetPlan
 from ros_support import PARAMS, installed, wait_for
@@ -24,6 +25,7 @@ from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.topics import ROBOT_DESCRIPTION, ROBOT_DESCRIPTION_SEMANTIC
 
 STATUS = 'ftplan_planner: robot_description'
+PLAN_STATUS = 'ftplan_planner: plan'
 SEMANTIC_STATUS = 'ftplan_planner: robot_description_semantic'
 JOINT_STATUS = 'ftplan_planner: joint_states'
 
@@ -135,7 +137,7 @@ def test_a_description_that_arrives_during_a_build_supersedes_it(ros, planner):
 
 
 def test_the_srdf_gives_the_exceptions_and_a_bad_one_keeps_the_last_good_robot(ros, planner):
-    assert 'by default' in statuses(ros, STATUS, 'OK')[-1].message
+    assert 'sampled as MoveIt' in statuses(ros, STATUS, 'OK')[-1].message
     before = len(statuses(ros, STATUS))
     publish(ros, ROBOT_DESCRIPTION_SEMANTIC, PANDA_SRDF.read_text())
     ok = wait_for(lambda: statuses(ros, STATUS, 'OK', after=before), 60.0, 'the new robot')[0]
@@ -150,6 +152,33 @@ def test_the_srdf_gives_the_exceptions_and_a_bad_one_keeps_the_last_good_robot(r
             "names link 'panda_wrist', which the URDF does not have") in error.message
     assert 'keeping the last good robot' in error.message
     assert planner.scene.robot.model.disabled_pairs is pairs
+
+
+def test_the_srdf_on_the_topic_exempts_the_pair_that_blocked_every_start(ros, tmp_path):
+    """The CAD arm whose `upper` and `fore` touch in 91 % of random configurations: MoveIt's
+    sampling keeps that pair checked, and the planner answers that it blocks every start
+    and that the SRDF would exempt it; with the SRDF on /robot_description_semantic the
+    same request is planned."""
+    scene_file = tmp_path / 'no_robot.yaml'
+    scene_file.write_text('obstacles: []\n')
+    ros.make(PlannerNode, scene_file, base_link='base', tip_link='tip', task_kind='position')
+    publish(ros, ROBOT_DESCRIPTION, CAD_ARM_SHORT_UPPER)
+    ok = wait_for(lambda: statuses(ros, STATUS, 'OK'), 60.0, 'the arm')[0]
+    assert 'sampled as MoveIt' in ok.message
+
+    def position(point):
+        return PoseStamped(header=Header(frame_id='base_link'),
+                           pose=create_pose(point, [0.0, 0.0, 0.0, 1.0]))
+    request = GetPlan.Request(start=position(CAD_ARM_TASK['start']),
+                              goal=position(CAD_ARM_TASK['goal']))
+    assert not ros.probe.call(GetPlan, '/ftplan/plan', request, timeout=60.0).plan.poses
+    refused = wait_for(lambda: statuses(ros, PLAN_STATUS, 'WARN'), 60.0, 'the reason')[0]
+    assert ('upper / fore overlap in every one of the 100 sampled start configurations: if '
+            'they may touch, exempt them: add [upper, fore] to robot.disabled_collisions or '
+            "give the robot's SRDF (robot.srdf, /robot_description_semantic)") in refused.message
+    publish(ros, ROBOT_DESCRIPTION_SEMANTIC, CAD_ARM_SRDF)
+    wait_for(lambda: statuses(ros, STATUS, 'OK', after=1), 60.0, 'the arm with its SRDF')
+    assert ros.probe.call(GetPlan, '/ftplan/plan', request, timeout=60.0).plan.poses
 
 
 def test_a_disabled_collisions_parameter_leaves_the_srdf_topic_unused(ros, tmp_path):

@@ -10,8 +10,8 @@ says so until a full set (a MarkerArray whose first marker is DELETEALL) is appl
 Every update is reported as '<node>: obstacles' on /diagnostics, with the values
 `obstacles` (how many came from the topic), `update` (its publication sequence number),
 `obstacle_set` (the digest of the static and topic obstacles, as the plan status names
-them) and `complete`: OK; WARN for an array refused whole (the set stays as it was);
-ERROR while updates are lost.
+them) and `complete`: OK; ERROR for an array refused whole (the set stays as it was,
+and is incomplete: what was published is not what is held) and while updates are lost.
 """
 
 from __future__ import annotations
@@ -94,8 +94,8 @@ class ObstacleTopic:
         kept = values['obstacles']
         if problem:
             self._diagnostics.report(
-                'obstacles', 'ERROR' if lost else 'WARN', f'ignored obstacle markers: '
-                f'{problem}; keeping the {kept} previous' + (f'; {lost}' if lost else ''),
+                'obstacles', 'ERROR', f'ignored obstacle markers: {problem}; the set is not '
+                f'the one published: {FULL_SET_FIX}; holding the {kept} previous meanwhile',
                 values, log=True)
         elif lost:
             self._diagnostics.report('obstacles', 'ERROR', f'{lost}: {FULL_SET_FIX}; '

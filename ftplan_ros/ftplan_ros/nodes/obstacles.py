@@ -82,35 +82,48 @@ class ObstacleSet:
     wait, in order, and are applied when `rebase` gives one.
 
     Updates must all be applied, in order: `lost` says why the set is not the one
-    published when some were not received ('' when it is). It is set by an update that
-    comes after lost ones (`update`'s `lost`) and cleared by a full set (`is_full_set`)
-    applied after them.
+    published when some were not received or were refused ('' when it is). It is set by
+    an update that comes after lost ones (`update`'s `lost`) or by one refused, and
+    cleared by a full set (`is_full_set`) applied after them.
     """
 
     def __init__(self, base: Scene | None):
         self.base = base
         self.shapes: Mapping[ObstacleKey, ObstacleShape] = {}
         self.obstacles: tuple[Obstacle, ...] = ()
-        self.checker = None if base is None else CollisionChecker(base.robot, base.obstacles)
         self.lost = ''
         self._waiting: list[tuple[MarkerArray, str]] = []
+        self._checker: tuple[Scene, tuple[Obstacle, ...], CollisionChecker] | None = None
 
     @property
-    def frame_id(self) -> str | None:
-        """The base frame the markers must be in (None before there is a base scene)."""
-        return None if self.base is None else self.base.frame_id
+    def checker(self) -> CollisionChecker | None:
+        """The checker of the base scene with these obstacles (None without a base scene).
+
+        Built when first asked for after a change, so that a burst of updates costs one
+        build, not one per update; kept with the base and obstacles it was built for, so
+        that a build that an update overtook is not taken for the new set.
+        """
+        base, obstacles = self.base, self.obstacles
+        if base is None:
+            return None
+        built = self._checker
+        if built is None or built[0] is not base or built[1] is not obstacles:
+            scene = base.with_obstacles(obstacles) if obstacles else base
+            built = self._checker = (base, obstacles,
+                                     CollisionChecker(scene.robot, scene.obstacles))
+        return built[2]
 
     def update(self, msg: MarkerArray, lost: str = '') -> None:
         """Apply a MarkerArray (ADD, DELETE, DELETEALL); all or nothing.
 
         :param lost: why updates before this one were lost ('' when none were).
-        :raises ValueError: on a malformed marker; the set is then left as it was.
+        :raises ValueError: on a malformed marker; the set's obstacles are then left as
+            they were, and `lost` says it is not the set published.
         """
         if self.base is None:
             self._wait(msg, lost)
             return
         self._apply(msg, lost)
-        self.checker = CollisionChecker(self.base.robot, self.scene().obstacles)
 
     def _wait(self, msg: MarkerArray, lost: str) -> None:
         self._waiting.append((msg, lost))
@@ -123,8 +136,13 @@ class ObstacleSet:
 
     def _apply(self, msg: MarkerArray, lost: str) -> None:
         self.lost = lost or self.lost
-        shapes = read_obstacle_markers(msg, self.base.frame_id, self.shapes)
-        obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
+        try:
+            shapes = read_obstacle_markers(msg, self.base.frame_id, self.shapes)
+            obstacles = tuple(obstacle_from_shape(shapes[key]) for key in sorted(shapes))
+        except ValueError as error:
+            refused = f'an obstacle update was refused ({error})'
+            self.lost = f'{self.lost}; {refused}' if self.lost else refused
+            raise
         self.shapes, self.obstacles = shapes, obstacles
         if is_full_set(msg):
             self.lost = ''
@@ -142,7 +160,6 @@ class ObstacleSet:
                 self._apply(msg, lost)
             except ValueError as error:
                 problems.append(str(error))
-        self.checker = CollisionChecker(base.robot, self.scene().obstacles)
         return problems
 
     @property

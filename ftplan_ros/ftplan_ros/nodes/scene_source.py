@@ -7,7 +7,7 @@ tool at `tip_offset` [m] in the tip link's frame. Its self-collision exceptions 
 from one place: the `disabled_collisions` parameter (link names in pairs, flattened:
 [a1, b1, a2, b2, ...]) when it is set, else the SRDF that MoveIt's move_group publishes
 on /robot_description_semantic (std_msgs/String, transient local; core/srdf.py), else
-the core's default (adjacent links and links touching at the zero configuration).
+MoveIt's sampled default (core/io/sampled_exceptions.py: cached per robot, logged).
 
 The robot is built again whenever either description changes, in a thread of its own,
 and its compiled kernels are run there once (core/warmup.py: seconds for a robot of a
@@ -120,8 +120,9 @@ class SceneSource:
         declare_array(node, 'disabled_collisions', Parameter.Type.STRING_ARRAY,
                       'Robot from /robot_description: link pairs never checked for '
                       'self-collision, flattened [a1, b1, a2, b2, ...] (empty: the SRDF\'s on '
-                      '/robot_description_semantic, else adjacent links and links touching at '
-                      'the zero configuration).', read_only=True)
+                      '/robot_description_semantic, else MoveIt\'s sampled default: adjacent '
+                      'links, links touching in >= 95 % or in none of 10,000 random '
+                      'configurations).', read_only=True)
 
     def _check_description_parameters(self) -> None:
         """Read the parameters once (they are read-only); InputError when they cannot serve."""
@@ -190,7 +191,7 @@ class SceneSource:
         elif srdf is not None:
             exceptions = f'from {ROBOT_DESCRIPTION_SEMANTIC}'
         else:
-            exceptions = 'by default (adjacent links and links touching at zero angles)'
+            exceptions = 'sampled as MoveIt\'s setup assistant does (logged)'
         try:
             arm = robot_from_urdf(urdf, self._tip_link, self._base_link, self._tip_offset,
                                   self._disabled_pairs or None, srdf=srdf)

@@ -3,12 +3,14 @@ and never exempting a chain link pair the SRDF does not exempt whole."""
 
 import itertools
 
+import numpy as np
 import pytest
 import yaml
 from descriptions import HOSTILE_XML, PANDA_SRDF, PANDA_URDF, srdf_documents
-from ftplan_testing import ROBOTS, robot_config
+from ftplan_testing import CAD_ARM, CAD_ARM_SRDF, ROBOTS, robot_config
 from hypothesis import given, settings
 
+from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import load_scene, robot_from_urdf
 from ftplan_ros.core.model.srdf import (
@@ -84,6 +86,31 @@ def test_a_chain_pair_is_exempt_only_when_every_folded_link_pair_is():
     assert arm.model.disabled_pairs == {(6, 7)}
 
 
+# The CAD arm with a cap on the side of `fore` (folded into it), which its SRDF does not name.
+CAPPED_CAD_ARM = CAD_ARM.replace('<link name="hand">', """<joint name="cap_joint" type="fixed">
+    <parent link="fore"/><child link="cap"/><origin xyz="0.06 0 0.15"/>
+  </joint>
+  <link name="cap">
+    <collision><geometry><box size="0.02 0.02 0.02"/></geometry></collision>
+  </link>
+  <link name="hand">""")
+
+
+def test_a_pair_exempt_in_part_is_checked_shape_by_shape():
+    """The SRDF exempts upper / fore, not upper / cap: the pair of chain links is checked, but
+    only upper against the cap (a UR arm's SRDF and the ee_link folded into wrist_3_link).
+    Before, fore's cylinder was checked against upper's too: they overlap once bent."""
+    arm = robot_from_urdf(CAPPED_CAD_ARM, 'tip', 'base', srdf=CAD_ARM_SRDF)
+    names = arm.model.link_names
+    assert (names.index('upper'), names.index('fore')) not in arm.model.disabled_pairs
+    checker = CollisionChecker(arm, [])
+    assert 'upper[0] / fore[1]' in checker.channel_names  # the cap
+    assert 'upper[0] / fore[0]' not in checker.channel_names
+    bent = np.array([[0.0, 1.0, 0.0, 0.0]])
+    assert checker.min_clearance(bent)[0] > 0.0
+    assert arm.exempt_urdf_pairs >= {frozenset(('upper', 'fore'))}
+
+
 def test_default_and_enabled_collisions_as_moveit_reads_them():
     exceptions = read_srdf(srdf('<disable_default_collisions link="panda_link0"/>',
                                 '<enable_collisions link1="panda_link0" link2="panda_link5"/>',
@@ -140,3 +167,13 @@ def test_any_srdf_text_is_exceptions_or_an_input_error_and_exempts_only_whole_pa
         whole = all(exceptions.exempts(s.urdf_link, t.urdf_link) for s in model.shapes
                     for t in model.shapes if (s.link, t.link) == (a, b))
         assert ((a, b) in exempt) == whole
+
+
+def test_an_srdf_written_for_another_robot_is_refused():
+    """Review of issue 34 on vendor models: cassie_v2.srdf (robot 'cassie', no entries)
+    given with the Panda's URDF was taken as the Panda's, so every pair was checked and
+    the planner blamed obstacles in a scene that had none."""
+    with pytest.raises(InputError, match=r"robot\.srdf: is written for robot 'cassie', the "
+                       r"URDF describes 'panda': give the SRDF of this robot"):
+        robot_from_urdf(PANDA_URDF.read_text(), 'panda_hand_tcp', 'panda_link0',
+                        srdf='<robot name="cassie"><group name="legs"/></robot>')

@@ -185,6 +185,14 @@ PRISMATIC = bot_urdf().replace('<joint name="elbow" type="revolute"',
                                '<joint name="elbow" type="prismatic"')
 
 
+def with_mimic(follower: str, leader: str) -> str:
+    """The bot's URDF with joint `follower` mimicking `leader` (multiplier 1, offset 0)."""
+    xml = bot_urdf()
+    at = xml.index(f'<joint name="{follower}"')
+    end = xml.index('</joint>', at)
+    return xml[:end] + f'<mimic joint="{leader}"/>' + xml[end:]
+
+
 @pytest.mark.parametrize('xml, tip, base, field, words', [
     pytest.param('<robot name="x"><link name="a"></robot>', 'tcp', None, 'robot.file',
                  'not valid XML', id='malformed-xml'),
@@ -201,10 +209,16 @@ PRISMATIC = bot_urdf().replace('<joint name="elbow" type="revolute"',
                  id='planar'),
     pytest.param(bot_urdf().replace('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>'), 'tcp', None,
                  'robot.file', "'elbow'.* axis", id='zero-axis'),
-    pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file', 'collision geometry',
+    pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file',
+                 "link 'l2': collision mesh 'missing.stl' was not found; looked in",
                  id='missing-mesh-file'),
     pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file', 'collision geometry',
                  id='garbage-mesh-file'),
+    pytest.param(with_mimic('elbow', 'tilt'), 'tcp', None, 'robot.file',
+                 "'elbow' mimics 'tilt'.* coupled joints are not supported", id='mimic-in-chain'),
+    pytest.param(with_mimic('finger_joint', 'wrist'), 'tcp', None, 'robot.file',
+                 "'finger_joint' mimics 'wrist', and 'wrist' moves the chain",
+                 id='mimic-of-a-chain-joint'),
     pytest.param(bot_urdf(), 'l1', 'l3', 'robot.base_link', "'l3' moves with joint 'elbow'",
                  id='base-below-the-tip'),
     pytest.param(bot_urdf(), 'base', None, 'robot.tip_link', "no joint moves 'base'",
@@ -225,14 +239,38 @@ def test_bad_urdfs_give_one_line_naming_the_field(urdf_file, xml, tip, base, fie
     assert re.search(words, str(error.value)), str(error.value)
 
 
+def test_a_mimic_joint_off_the_chain_following_one_off_the_chain_is_accepted(urdf_file):
+    """The two fingers of a gripper: both held still, so the coupling changes nothing."""
+    xml = bot_urdf().replace(
+        '<link name="finger">', '<link name="finger">\n  </link>\n  <joint name="finger2" '
+        'type="prismatic"><parent link="hand"/><child link="finger_b"/><axis xyz="0 1 0"/>'
+        '<limit lower="0" upper="0.04" effort="1" velocity="1"/><mimic joint="finger_joint"/>'
+        '</joint>\n  <link name="finger_b">', 1)
+    path = urdf_file(xml)
+    arm = robot_from_urdf(xml, 'tcp', mesh_dirs=[str(path.parent)])
+    assert arm.joint_names == ('spin', 'tilt', 'elbow', 'wrist')
+
+
+def test_a_chain_longer_than_the_bound_is_refused_before_it_is_built():
+    """Review of issue 33: a chain of 999 joints (270 kB, within every bound of the URDF's
+    size) kept chain_from_urdf busy for more than 170 s; a planner's robot thread 104 s."""
+    links = ''.join(f'<link name="l{k}"/>' for k in range(41))
+    joints = ''.join(f'<joint name="j{k}" type="revolute"><parent link="l{k}"/><child '
+                     f'link="l{k + 1}"/><origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit '
+                     'lower="-1" upper="1" effort="1" velocity="1"/></joint>' for k in range(40))
+    with pytest.raises(InputError, match=r"robot\.tip_link: 40 joints move 'l40' relative to "
+                       r"'l0': ftplan plans for chains of at most 32"):
+        chain_from_urdf(f'<robot name="long">{links}{joints}</robot>', 'l40')
+
+
 def test_chain_from_urdf_names_its_caller(urdf_file):
     with pytest.raises(InputError, match=r'^arm\.tip_link'):
         chain_from_urdf(bot_urdf(), 'gripper', where='arm')
 
 
-ONE_JOINT = '''<robot name="one"><link name="base">
+ONE_JOINT = '''<robot name="one"><link name="base"/><link name="arm">
   <collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
-  <link name="arm"/><link name="tip"/>
+  <link name="tip"/>
   <joint name="turn" type="revolute"><parent link="base"/><child link="arm"/>
     <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
   <joint name="tool" type="fixed"><parent link="arm"/><child link="tip"/>
@@ -247,3 +285,33 @@ def test_a_chain_of_one_joint_with_geometry_on_one_link_is_read():
     assert np.allclose(robot.model.axes, [[0.0, 0.0, 1.0]])
     assert robot.model.self_collision_pairs == ()
     assert np.allclose(robot.forward_kinematics(np.array([np.pi / 2])), [0.0, 0.5, 0.0])
+
+
+def test_a_chain_whose_moving_links_have_no_collision_geometry_is_refused():
+    """Review of issue 34 on vendor URDFs: a URDF without <collision> elements crashed
+    the loader with numpy's 'zero-size array to reduction operation minimum'."""
+    bare = ONE_JOINT.replace('<collision><geometry><box size="0.2 0.2 0.1"/></geometry>'
+                             '</collision>', '')
+    with pytest.raises(InputError, match=r"robot\.file: no link that the joints 'base' -> "
+                       r"'tip' move has <collision> geometry"):
+        robot_from_urdf(bare, 'tip', task_kind='position')
+
+
+def test_a_link_named_as_a_joint_gets_one_line_naming_it(urdf_file):
+    """anymal.urdf names a link and a joint LF_HAA: Pinocchio's buildReducedModel raised
+    'Several frames match the filter' through the loader."""
+    xml = bot_urdf().replace('name="finger"', 'name="finger_joint"').replace(
+        'link="finger"', 'link="finger_joint"')
+    path = urdf_file(xml)
+    with pytest.raises(InputError, match=r"robot\.file: cannot hold the joints off the chain "
+                       r"still: .*link 'finger_joint' has the name of a joint: rename one"):
+        robot_from_urdf(xml, 'tcp', mesh_dirs=[str(path.parent)])
+
+
+def test_limits_of_a_whole_turn_rounded_up_are_a_whole_turn():
+    """UR's URDFs write ±2π as ±6.28318530718, 4e-13 rad too wide: they were refused."""
+    robot = robot_from_urdf(ONE_JOINT.replace('lower="-1" upper="1"', 'lower="-6.28318530718" '
+                                              'upper="6.2832"'), 'tip', task_kind='position')
+    assert robot.limits[0].tolist() == [-2.0 * np.pi, 2.0 * np.pi]
+    with pytest.raises(InputError, match=r"^robot\.file: joint 'turn' has limits \[-6.3, 1.0\]"):
+        robot_from_urdf(ONE_JOINT.replace('lower="-1"', 'lower="-6.3"'), 'tip')

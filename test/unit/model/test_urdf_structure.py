@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from ftplan_ros.core.errors import InputError
+from ftplan_ros.core.io.mesh_files import with_mesh_files
 from ftplan_ros.core.io.scene_file import robot_from_urdf
 from ftplan_ros.core.model.description_xml import MAX_DEPTH, MAX_ELEMENTS
 from ftplan_ros.core.model.urdf import chain_from_urdf
@@ -239,7 +240,7 @@ def test_any_urdf_text_is_a_chain_or_an_input_error_naming_its_field(meshes):
             return
         tip = data.draw(st.sampled_from(description.links))
         try:
-            chain = chain_from_urdf(description, tip, mesh_dirs=[str(meshes)])
+            chain = chain_from_urdf(with_mesh_files(description, mesh_dirs=[meshes]), tip)
         except InputError as error:
             assert error.field in ('robot.file', 'robot.tip_link'), str(error)
             seen['no chain'] += 1

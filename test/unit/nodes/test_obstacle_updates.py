@@ -101,7 +101,35 @@ def test_a_refused_update_still_records_the_loss_before_it():
     bad.scale.x = 0.0
     with pytest.raises(ValueError, match='scale'):
         obstacles.update(full(bad), lost='update 1 was not received')
-    assert obstacles.lost == 'update 1 was not received' and len(obstacles) == 0
+    assert obstacles.lost.startswith('update 1 was not received; an obstacle update was '
+                                     'refused (') and len(obstacles) == 0
+
+
+def test_a_refused_update_leaves_the_set_incomplete_until_a_full_set():
+    """Review of issue 33: the set stayed 'complete' after a refused array, so a plan was
+    served for a goal that the refused array covered."""
+    obstacles = ObstacleSet(FIG3A)
+    obstacles.update(full(sphere(1)))
+    bad = sphere(2)
+    bad.scale.x = float('nan')
+    with pytest.raises(ValueError, match='scale'):
+        obstacles.update(update(bad))
+    assert obstacles.lost.startswith('an obstacle update was refused (')
+    assert sorted(obstacles.shapes) == [('u', 1)]
+    obstacles.update(update(sphere(3)))
+    assert obstacles.lost                        # an update is not a full set
+    obstacles.update(full(sphere(4)))
+    assert obstacles.lost == '' and sorted(obstacles.shapes) == [('u', 4)]
+
+
+def test_the_checker_is_built_for_the_set_as_it_is_when_asked():
+    obstacles = ObstacleSet(FIG3A)
+    static = obstacles.checker
+    assert obstacles.checker is static           # no change: no new build
+    obstacles.update(full(sphere(1)))
+    checker = obstacles.checker
+    assert checker is not static
+    assert len(checker.obstacles) == len(FIG3A.obstacles) + 1
 
 
 def test_a_loss_before_the_robot_is_applied_in_order_with_the_updates():

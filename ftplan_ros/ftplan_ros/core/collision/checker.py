@@ -150,9 +150,12 @@ class CollisionChecker:
         self._moving = int(np.count_nonzero(self._links != 0))
         self.pairs = tuple(robot.self_collision_pairs)
         self._lever_arms = None
+        exempt = robot.exempt_urdf_pairs
         self._shape_pairs = np.array(
             [(s, t) for a, b in self.pairs for s in np.flatnonzero(self._links == a)
-             for t in np.flatnonzero(self._links == b)], dtype=np.int64).reshape(-1, 2)
+             for t in np.flatnonzero(self._links == b)
+             if frozenset((items[s].urdf_link, items[t].urdf_link)) not in exempt],
+            dtype=np.int64).reshape(-1, 2)
         first, second = (self._shapes.kinds[self._shape_pairs[:, k]] for k in (0, 1))
         self._pair_modes = pair_modes(first, second)
         self._pair_exact = exact_pairs(first, second)

@@ -16,7 +16,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from ..collision.self_collision import default_disabled_pairs
 from ..errors import InputError
 from ..model.chain import ChainModel
 from ..model.dh import DHRow, chain_from_dh
@@ -30,13 +29,15 @@ from ..model.scene import (
     Task,
 )
 from ..model.spatial import SpatialArm
-from ..model.srdf import chain_exceptions, read_srdf
+from ..model.srdf import read_srdf, with_exceptions
 from ..model.task_space import unit_vector
 from ..model.urdf import chain_from_urdf
 from ..model.urdf_structure import read_urdf
 from ..validation import check_keys, mapping, nonnegative, number, sequence, vector
 from .files import load_yaml, read_text
 from .limits_file import load_joint_limits
+from .mesh_files import with_mesh_files
+from .sampled_exceptions import parse_sampling, sampled_exceptions
 
 # [rad] Widest joint limit: a joint that turns further has no limit (it wraps).
 LARGEST_JOINT_ANGLE = 2.0 * math.pi
@@ -157,20 +158,24 @@ def _planar_robot(data: Mapping) -> PlanarChain:
 
 def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
     check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
-                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf',
-                          'joint_limits'))
+                optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf', 'mesh_dirs',
+                          'self_collision_sampling', 'joint_limits'))
     texts = {}
     for key, kind in (('file', 'URDF'), ('srdf', 'SRDF')):
         if key in data:
             if not isinstance(data[key], str) or not data[key]:
                 raise InputError(f'robot.{key}', f'must be the path of an {kind} file')
             texts[key] = read_text(directory / data[key], f'robot.{key}')
-    path = directory / data['file']
+    mesh_dirs = []
+    for k, folder in enumerate(sequence(data.get('mesh_dirs', []), 'robot.mesh_dirs')):
+        if not isinstance(folder, str) or not folder:
+            raise InputError(f'robot.mesh_dirs[{k}]', 'must be the path of a folder')
+        mesh_dirs.append(directory / folder)
     model = robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
                             data.get('tip_offset', [0.0, 0.0, 0.0]),
-                            data.get('disabled_collisions'),
-                            mesh_dirs=[str(path.parent), str(path.parent.parent)],
-                            srdf=texts.get('srdf')).model
+                            data.get('disabled_collisions'), mesh_dirs=mesh_dirs,
+                            srdf=texts.get('srdf'), directory=(directory / data['file']).parent,
+                            self_collision_sampling=data.get('self_collision_sampling')).model
     if 'joint_limits' not in data:
         return model
     if not isinstance(data['joint_limits'], str) or not data['joint_limits']:
@@ -183,7 +188,8 @@ def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
 
 def _dh_chain(data: Mapping) -> ChainModel:
     check_keys(data, 'robot', required=('type', 'rows'),
-                optional=('link_radius', 'joint_names', 'tip_offset', 'disabled_collisions'))
+                optional=('link_radius', 'joint_names', 'tip_offset', 'disabled_collisions',
+                          'self_collision_sampling'))
     rows = []
     for k, row in enumerate(sequence(data['rows'], 'robot.rows')):
         where = f'robot.rows[{k}]'
@@ -197,19 +203,26 @@ def _dh_chain(data: Mapping) -> ChainModel:
     offset = vector(data.get('tip_offset', [0.0, 0.0, 0.0]), 'robot.tip_offset', length=3)
     model = chain_from_dh(rows, _joint_names(data.get('joint_names'), len(rows)),
                           _link_radius(data), offset)
-    return with_disabled_collisions(model, data.get('disabled_collisions'))
+    return with_disabled_collisions(model, data.get('disabled_collisions'),
+                                    data.get('self_collision_sampling'))
 
 
 def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
                     tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
-                    disabled_collisions: Any = None, mesh_dirs: Sequence[str] = (),
-                    task_kind: str = 'pose', srdf: str | None = None) -> SpatialArm:
+                    disabled_collisions: Any = None, mesh_dirs: Sequence[str | Path] = (),
+                    task_kind: str = 'pose', srdf: str | None = None,
+                    directory: Path | None = None,
+                    self_collision_sampling: Any = None) -> SpatialArm:
     """Build the arm of a URDF given as text (e.g. /robot_description) for a kind of task.
 
     The arguments are those of a scene's `robot: {type: urdf, ...}` (InputError names
     them the same way); `srdf` is the text of an SRDF (e.g. /robot_description_semantic)
     whose exceptions replace the default ones (srdf.py). The exceptions come from one
-    place: an SRDF beside a `disabled_collisions` list is refused.
+    place: an SRDF beside a `disabled_collisions` list is refused, and either beside
+    `self_collision_sampling` (how the exceptions of a robot without them are sampled:
+    io/sampled_exceptions.py). Meshes are found as
+    io/mesh_files.py says, from `directory` (the URDF file's folder; None for a URDF that
+    is no file) and `mesh_dirs`.
     """
     for key, value in (('tip_link', tip_link), ('base_link', base_link)):
         if value is not None and (not isinstance(value, str) or not value):
@@ -217,24 +230,38 @@ def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
     if srdf is not None and disabled_collisions is not None:
         raise InputError('robot.srdf', 'and robot.disabled_collisions both give the '
                          'self-collision exceptions: keep one of them')
+    if srdf is not None and self_collision_sampling is not None:
+        raise InputError('robot.self_collision_sampling', 'samples the exceptions of a robot '
+                         'without them, and robot.srdf gives them: keep one of them')
     offset = vector(list(tip_offset), 'robot.tip_offset', length=3)
     urdf = read_urdf(xml)
-    exceptions = None if srdf is None else read_srdf(srdf, urdf.links)
-    model = chain_from_urdf(urdf, tip_link, base_link, offset, mesh_dirs=mesh_dirs)
+    exceptions = None if srdf is None else read_srdf(srdf, urdf.links, robot_name=urdf.name)
+    urdf = with_mesh_files(urdf, directory, [Path(d) for d in mesh_dirs])
+    model = chain_from_urdf(urdf, tip_link, base_link, offset)
+    if not any(item.link >= 1 for item in model.shapes):
+        raise InputError('robot.file', f'no link that the joints {model.link_names[0]!r} -> '
+                         f'{tip_link!r} move has <collision> geometry: ftplan checks the '
+                         'links\' collision shapes against obstacles and each other; give '
+                         'them <collision> elements')
     if exceptions is not None:
-        return SpatialArm(replace(model, disabled_pairs=chain_exceptions(model, exceptions)),
-                          task_kind)
-    return SpatialArm(with_disabled_collisions(model, disabled_collisions), task_kind)
+        return SpatialArm(with_exceptions(model, exceptions), task_kind)
+    return SpatialArm(with_disabled_collisions(model, disabled_collisions,
+                                               self_collision_sampling), task_kind)
 
 
-def with_disabled_collisions(model: ChainModel, data: Any) -> ChainModel:
+def with_disabled_collisions(model: ChainModel, data: Any, sampling: Any = None) -> ChainModel:
     """Return the model with its self-collision exceptions: `data` lists link-name pairs.
 
-    Without a list, adjacent links and links that touch at the reference configuration
-    are exempt (collision/self_collision.py; `tools/self_collision_pairs.py` writes a full list).
+    Without a list, MoveIt's sampled exceptions: adjacent links, links touching in >= 95 %
+    of random configurations and links touching in none (io/sampled_exceptions.py), sampled
+    as `sampling` (a robot's `self_collision_sampling`) says; a list beside it is refused.
     """
     if data is None:
-        return replace(model, disabled_pairs=default_disabled_pairs(model))
+        return replace(model, disabled_pairs=sampled_exceptions(model, parse_sampling(sampling)))
+    if sampling is not None:
+        raise InputError('robot.self_collision_sampling', 'samples the exceptions of a robot '
+                         'without them, and robot.disabled_collisions gives them: keep one of '
+                         'them')
     pairs = set()
     for k, pair in enumerate(sequence(data, 'robot.disabled_collisions')):
         names = sequence(pair, f'robot.disabled_collisions[{k}]')

@@ -28,7 +28,9 @@ class ChainModel:
     j = 0) at zero angle; `axes` (n, 3): unit axes in the joints' own frames; `tool`
     (4, 4): the tool frame in the last joint's frame. `joint_limits[j]` is (lower,
     upper) [rad] or None for a continuous joint. `link_names` has n + 1 names, the base
-    first. `disabled_pairs` are link pairs never checked for self-collision.
+    first. `disabled_pairs` are link pairs never checked for self-collision;
+    `exempt_urdf_pairs` are pairs of URDF links whose shapes are never checked, also
+    where their chain links are (an SRDF's exemptions of links folded into others).
     `motion_limits` are the joints' velocity, acceleration and jerk limits (None: the
     defaults of motion_limits.py).
     """
@@ -42,6 +44,7 @@ class ChainModel:
     joint_limits: tuple[tuple[float, float] | None, ...]
     shapes: tuple[LinkShape, ...] = ()
     disabled_pairs: frozenset[tuple[int, int]] = field(default_factory=frozenset)
+    exempt_urdf_pairs: frozenset[frozenset[str]] = field(default_factory=frozenset)
     tool_frame: str = 'tool'
     motion_limits: MotionLimits | None = None
 

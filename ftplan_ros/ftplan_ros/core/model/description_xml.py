@@ -110,6 +110,7 @@ def read_numbers(element: ElementTree.Element, attribute: str, count: int, where
         value = float(item)
         if not (math.isfinite(value) and abs(value) <= LARGEST_NUMBER):
             raise InputError(where, f'{what} {attribute}="{text:.60}": {item:.30} is not '
-                             f'within ±{LARGEST_NUMBER:g}')
+                             f'within ±{LARGEST_NUMBER:g}, the bound of every number ftplan '
+                             'reads: write a value within it, or leave the element out')
         values.append(value)
     return values

@@ -87,6 +87,10 @@ class Robot(Protocol):
     def self_collision_pairs(self) -> tuple[tuple[int, int], ...]:
         """Link pairs (a, b), a < b, whose distance must stay positive."""
 
+    @property
+    def exempt_urdf_pairs(self) -> frozenset[frozenset[str]]:
+        """Pairs of URDF links (`LinkShape.urdf_link`) whose shapes are never checked."""
+
     def frame_lever_arms(self) -> np.ndarray:
         """(L, n) bound [m] on the distance from joint a's axis to the origin of link j's frame.
 
@@ -237,6 +241,11 @@ class PlanarChain:
         """None: the paper's arm folds onto itself."""
         return ()
 
+    @property
+    def exempt_urdf_pairs(self) -> frozenset[frozenset[str]]:
+        """None: the arm has no URDF."""
+        return frozenset()
+
     def frame_lever_arms(self) -> np.ndarray:
         """(n+1, n) R[j, a] = Σ_{k=a..j-2} ℓ_k [m]: joint a to link j's origin (joint j-1)."""
         lengths = np.asarray(self.link_lengths)
@@ -302,6 +311,8 @@ def geometry_sha256(robot: Robot) -> str:
         for array in (link.placement, shape.vertices, shape.faces):
             geometry.update(np.ascontiguousarray(array).tobytes())
     geometry.update(repr(robot.self_collision_pairs).encode())
+    if robot.exempt_urdf_pairs:  # robots without them keep the digests they had
+        geometry.update(repr(sorted(sorted(pair) for pair in robot.exempt_urdf_pairs)).encode())
     return geometry.hexdigest()
 
 

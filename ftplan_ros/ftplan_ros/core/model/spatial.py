@@ -108,6 +108,11 @@ class SpatialArm:
         """Link pairs checked for self-collision (all but the disabled ones)."""
         return self.model.self_collision_pairs
 
+    @property
+    def exempt_urdf_pairs(self) -> frozenset[frozenset[str]]:
+        """URDF link pairs never checked (`ChainModel.exempt_urdf_pairs`)."""
+        return self.model.exempt_urdf_pairs
+
     def frame_lever_arms(self) -> np.ndarray:
         """(n+1, n) [m]: see `ChainModel.frame_lever_arms`."""
         return self.model.frame_lever_arms()

@@ -9,15 +9,17 @@ error, and so is a document over MAX_SRDF_BYTES or with more than MAX_SRDF_ENTRI
 collision entries.
 
 The planner checks chain links, each carrying the geometry of the URDF links folded
-into it (fixed joints, locked fingers: urdf.py). A pair of chain links is exempt only
-when the SRDF exempts every pair of URDF links with geometry across the two: what the
-SRDF does not exempt stays checked.
+into it (fixed joints, locked fingers: urdf.py). A pair of chain links is exempt whole
+when the SRDF exempts every pair of URDF links with geometry across the two; otherwise
+the pair is checked shape by shape, leaving out the shapes of the URDF links the SRDF
+exempts (a UR arm's SRDF exempts wrist_2_link / wrist_3_link, but not wrist_2_link /
+ee_link, folded into wrist_3_link): what the SRDF does not exempt stays checked.
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import combinations
 
 from ..errors import InputError
@@ -47,15 +49,19 @@ class CollisionExceptions:
 
 
 def read_srdf(text: str, links: Collection[str], where: str = 'robot.srdf',
-              ) -> CollisionExceptions:
-    """Read an SRDF's collision entries, checked against the URDF's `links`.
+              robot_name: str | None = None) -> CollisionExceptions:
+    """Read an SRDF's collision entries, checked against the URDF's `links` and name.
 
-    InputError `where` names the entry and the link that is wrong.
+    InputError `where` names the entry and the link that is wrong, or the robot: as
+    MoveIt, an SRDF whose <robot name> is not the URDF's `robot_name` is refused.
     """
     root = parse_description(text, where, MAX_SRDF_BYTES)
     if root.tag != 'robot':
         raise InputError(where, f'is not an SRDF: it is a <{root.tag}> element, an SRDF one '
                          '<robot>')
+    if robot_name is not None and root.get('name') != robot_name:
+        raise InputError(where, f'is written for robot {root.get("name")!r}, the URDF '
+                         f'describes {robot_name!r}: give the SRDF of this robot')
     tags = ('disable_collisions', 'enable_collisions', 'disable_default_collisions')
     entries = [element for element in root if element.tag in tags]
     if len(entries) > MAX_SRDF_ENTRIES:
@@ -86,6 +92,15 @@ def _link(element, attribute: str, known: set[str], where: str, what: str) -> st
         raise InputError(where, f'{what} names link {name!r}, which the URDF does not have: '
                          'the SRDF must be written for this URDF')
     return name
+
+
+def with_exceptions(model: ChainModel, exceptions: CollisionExceptions) -> ChainModel:
+    """Return the model with the SRDF's exceptions: chain pairs exempt whole, URDF pairs."""
+    links = sorted({item.urdf_link for item in model.shapes})
+    exempt = frozenset(frozenset((x, y)) for x, y in combinations(links, 2)
+                       if exceptions.exempts(x, y))
+    return replace(model, disabled_pairs=chain_exceptions(model, exceptions),
+                   exempt_urdf_pairs=exempt)
 
 
 def chain_exceptions(model: ChainModel, exceptions: CollisionExceptions,

@@ -7,8 +7,9 @@ path (fingers, a second arm) are locked at zero with Pinocchio's `buildReducedMo
 which folds their links' geometry into the chain, and fixed joints are folded in the
 same way. Joint velocity limits are the URDF's (`<limit velocity>`; 0 or none: the
 default of motion_limits.py). Collision geometry is the links' `<collision>` elements:
-boxes, cylinders, spheres, capsules and meshes (loaded by Pinocchio; mesh paths are
-looked up next to the URDF and under `mesh_dirs`).
+boxes, cylinders, spheres, capsules and meshes (STL, OBJ, COLLADA: loaded by Pinocchio,
+through coal and assimp, from the paths the URDF gives; core/io/mesh_files.py makes them
+absolute).
 """
 
 from __future__ import annotations
@@ -28,15 +29,22 @@ from .urdf_structure import UrdfDescription, read_urdf
 _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
                'JointModelRevoluteUnboundedUnaligned')
+# [rad] Limits written as ±2π rounded up (6.28318530718 in UR's URDFs, 6.2832) are ±2π:
+# the range narrows by this much at most, which keeps every plan within the true limits.
+TURN_ROUNDING = 1e-4
 _PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
+# Joints of a chain: redundant arms have 7 or 8; the cost of building a chain (its
+# self-collision pairs) grows with the square of its links.
+MAX_CHAIN_JOINTS = 32
 
 
 def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str | None = None,
                     tip_offset: Sequence[float] = (0.0, 0.0, 0.0),
-                    mesh_dirs: Sequence[str] = (), where: str = 'robot') -> ChainModel:
+                    where: str = 'robot') -> ChainModel:
     """Build the chain base_link → tip_link of a URDF; tool at `tip_offset` [m].
 
-    `urdf` is the URDF's text, or what `read_urdf` made of it. `tip_offset` is in the tip
+    `urdf` is the URDF's text, or what `read_urdf` made of it; its mesh filenames are
+    read as paths (relative ones from the working directory). `tip_offset` is in the tip
     link's frame. Bad input raises InputError naming `<where>.file`, `<where>.base_link`
     or `<where>.tip_link`.
     """
@@ -59,6 +67,24 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     if not path:
         raise InputError(f'{where}.tip_link', f'no joint moves {tip_link!r} relative to '
                          f'{base_link!r}')
+    _check_chain_joints(model, path, urdf.mimics, base_link, tip_link, where)
+    try:
+        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
+    except (ValueError, RuntimeError) as error:
+        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
+                         f'{_one_line(error)}') from None
+    model, geometry = _hold_joints_off_the_chain(model, geometry, path, where)
+    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
+                  where)
+
+
+def _check_chain_joints(model: pin.Model, path: list[int], mimics: Sequence[tuple[str, str]],
+                        base_link: str, tip_link: str, where: str) -> None:
+    """Raise InputError unless the chain is short, revolute or continuous, and uncoupled."""
+    if len(path) > MAX_CHAIN_JOINTS:
+        raise InputError(f'{where}.tip_link', f'{len(path)} joints move {tip_link!r} relative '
+                         f'to {base_link!r}: ftplan plans for chains of at most '
+                         f'{MAX_CHAIN_JOINTS}; choose a tip_link (or base_link) nearer')
     for joint in path:
         kind = model.joints[joint].shortname()
         if kind not in _REVOLUTE + _CONTINUOUS:
@@ -66,17 +92,39 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
             raise InputError(f'{where}.file', f'joint {model.names[joint]!r} between '
                              f'{base_link!r} and {tip_link!r} is {what} ({kind}): only '
                              'revolute and continuous joints are supported')
-    try:
-        geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION,
-                                               package_dirs=list(mesh_dirs))
-    except (ValueError, RuntimeError) as error:
-        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
-                         f'{_one_line(error)}') from None
+    _refuse_coupled_joints(mimics, {model.names[j] for j in path}, base_link, tip_link, where)
+
+
+def _hold_joints_off_the_chain(model: pin.Model, geometry: pin.GeometryModel, path: list[int],
+                               where: str) -> tuple[pin.Model, pin.GeometryModel]:
+    """Lock the joints off the chain at zero (Pinocchio's buildReducedModel)."""
     locked = [j for j in range(1, model.njoints) if j not in path]
-    if locked:
-        model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
-    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
-                  where)
+    if not locked:
+        return model, geometry
+    try:
+        return pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
+    except (ValueError, RuntimeError) as error:
+        bodies = {frame.name for frame in model.frames if frame.type == pin.FrameType.BODY}
+        clash = sorted(bodies & set(model.names[1:]))
+        hint = f'; link {clash[0]!r} has the name of a joint: rename one' if clash else ''
+        raise InputError(f'{where}.file', f'cannot hold the joints off the chain still: '
+                         f'{_one_line(error)}{hint}') from None
+
+
+def _refuse_coupled_joints(mimics: Sequence[tuple[str, str]], chain: set[str], base_link: str,
+                           tip_link: str, where: str) -> None:
+    """Raise InputError if a mimic joint follows a chain joint or is one itself.
+
+    The chain's joints move independently in every step of the method, and the links
+    off the chain are held still: a coupling to a chain joint would move geometry that
+    the guarantee does not see.
+    """
+    for follower, leader in mimics:
+        if follower in chain or leader in chain:
+            raise InputError(f'{where}.file', f'joint {follower!r} mimics {leader!r}, and '
+                             f'{follower if follower in chain else leader!r} moves the chain '
+                             f'{base_link!r} -> {tip_link!r}: coupled joints are not '
+                             'supported there; remove the <mimic> or choose another tip_link')
 
 
 def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_link: str,
@@ -97,11 +145,12 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
         else:
             k = model.joints[j].idx_q
             low, high = float(model.lowerPositionLimit[k]), float(model.upperPositionLimit[k])
-            if not (-2.0 * np.pi <= low < high <= 2.0 * np.pi):
+            widest = 2.0 * np.pi + TURN_ROUNDING
+            if not (-widest <= low < high <= widest):
                 raise InputError(f'{where}.file', f'joint {model.names[j]!r} has limits '
                                  f'[{low}, {high}]: a revolute joint\'s must be an interval '
                                  'within ±2π [rad] (make it continuous to turn without limit)')
-            limits.append((low, high))
+            limits.append((max(low, -2.0 * np.pi), min(high, 2.0 * np.pi)))
     shapes = []
     for item in geometry.geometryObjects:
         placement = item.placement.homogeneous

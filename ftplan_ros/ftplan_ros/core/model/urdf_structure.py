@@ -57,12 +57,14 @@ class UrdfDescription:
     """A URDF that passed `read_urdf`: its robot's name, root link, links and text.
 
     `xml` is the document as it was checked (comments left out), for Pinocchio.
+    `mimics` pairs each joint that mimics another with the joint it follows.
     """
 
     name: str
     root: str
     links: tuple[str, ...]
     xml: str
+    mimics: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -87,14 +89,14 @@ def read_urdf(text: str, where: str = 'robot') -> UrdfDescription:
         raise InputError(field, 'has no <link>: a URDF has at least one')
     _unique_names(root.findall('joint'), 'joint', field)
     joints = [_joint(element, set(links), field) for element in root.findall('joint')]
-    _check_mimics(root.findall('joint'), field)
+    mimics = _mimics(root.findall('joint'), field)
     base = _root_link(links, joints, field)
     for element in root.findall('link'):
         _check_link_numbers(element, field)
     for material in root.iter('material'):
         for color in material.findall('color'):
             read_numbers(color, 'rgba', 4, field, f'material {material.get("name")!r} <color>')
-    return UrdfDescription(name, base, tuple(links), serialize(root))
+    return UrdfDescription(name, base, tuple(links), serialize(root), mimics)
 
 
 def _check_counts(root: ElementTree.Element, field: str) -> None:
@@ -157,8 +159,10 @@ def _joint(element: ElementTree.Element, links: set[str], field: str) -> _Joint:
     return _Joint(name, ends['parent'], ends['child'])
 
 
-def _check_mimics(elements: list[ElementTree.Element], field: str) -> None:
+def _mimics(elements: list[ElementTree.Element], field: str) -> tuple[tuple[str, str], ...]:
+    """Return (follower, leader) per mimic joint, after checking that each leader leads."""
     mimics = {element.get('name'): element.find('mimic') for element in elements}
+    pairs = []
     for name, mimic in mimics.items():
         if mimic is None:
             continue
@@ -169,6 +173,8 @@ def _check_mimics(elements: list[ElementTree.Element], field: str) -> None:
         if mimics[leader] is not None:
             raise InputError(field, f'joint {name!r} mimics {leader!r}, which mimics a joint '
                              'itself: name the joint that leads')
+        pairs.append((name, leader))
+    return tuple(pairs)
 
 
 def _root_link(links: list[str], joints: list[_Joint], field: str) -> str:

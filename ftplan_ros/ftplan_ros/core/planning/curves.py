@@ -135,6 +135,11 @@ class FrozenJoints:
         """The whole robot's self-collision pairs."""
         return self.robot.self_collision_pairs
 
+    @property
+    def exempt_urdf_pairs(self) -> frozenset[frozenset[str]]:
+        """The whole robot's exempt URDF link pairs."""
+        return self.robot.exempt_urdf_pairs
+
     def frame_lever_arms(self) -> np.ndarray:
         """(L, n') [m]: the whole robot's arms for the free joints (frozen ones never turn)."""
         return self.robot.frame_lever_arms()[:, self.free]

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 import numba
 import numpy as np
 
+from ..collision.blocking import find_blocking
 from ..collision.checker import CollisionChecker
 from ..errors import InputError
 from ..model.angles import whole_turns, wrap_configuration
@@ -158,6 +159,9 @@ class SurfaceSearch:
             if search.surface is not None or not arcs:
                 break
             self.report(f'no plan from {len(candidates)} starts; trying starts between them')
+        if search.surface is None and start_configuration is None:
+            search = self._explain_nothing_free(search, M_s, M_g, len(candidates), len(arcs))
+            stats.update(search.stats)
         stats['collision_checks'] = self.checker.checks
         stats['tolerated_joints'] = [self.robot.joint_names[i] for i in self.joints]
         return PlanResult(search.surface is not None, self.robot.joint_names, search.reason,
@@ -191,6 +195,22 @@ class SurfaceSearch:
         if self.prefer_starts is not None:
             search = replace(search, stats=dict(search.stats, start_preferred=False))
         return search
+
+    def _explain_nothing_free(self, search: _Search, M_s: tuple[SelfMotionManifold, ...],
+                              M_g: tuple[SelfMotionManifold, ...], starts: int,
+                              arcs: int) -> _Search:
+        """Say what blocks M_s (or M_g) when none of it is free: collision/blocking.py."""
+        if starts:
+            if arcs:
+                return search
+            which, branches = 'goal', M_g
+        else:
+            which, branches = 'start', M_s
+        blocking = find_blocking(self.checker, np.vstack([b.points for b in branches]),
+                                 self.margin)
+        return replace(search, reason=f'{search.reason}: {blocking.describe(which)}',
+                       stats=dict(search.stats, nothing_free={'manifold': which,
+                                                              **blocking.to_json()}))
 
     # Steps 3-6 ----------------------------------------------------------------------
 
