@@ -47,8 +47,10 @@ def create_joint_trajectory(
     times_from_start: ArrayLike,
     stamp: Time | None = None,
     frame_id: str = '',
+    velocities: ArrayLike | None = None,
+    accelerations: ArrayLike | None = None,
 ) -> JointTrajectory:
-    """Create a JointTrajectory with positions only.
+    """Create a JointTrajectory with positions (and velocities, accelerations if given).
 
     :param names: unique joint names, one per column of `positions`.
     :param positions: (k, n) joint positions [rad], one row per point.
@@ -57,6 +59,8 @@ def create_joint_trajectory(
         increasing.)
     :param stamp: header stamp (start time); None, i.e. zero, means "start now".
     :param frame_id: header frame, usually empty.
+    :param velocities: (k, n) [rad/s] of each point, or None (left empty).
+    :param accelerations: (k, n) [rad/s²] of each point, or None (left empty).
     :return: the JointTrajectory.
     """
     joints = joint_names(names, 'names')
@@ -75,9 +79,17 @@ def create_joint_trajectory(
         )
     _check_times(t, 'times_from_start')
     header = Header(stamp=stamp_or_zero(stamp), frame_id=optional_frame(frame_id, 'frame_id'))
+    rates = {}
+    for name, values in (('velocities', velocities), ('accelerations', accelerations)):
+        if values is not None:
+            rates[name] = finite_array(values, name)
+            if rates[name].shape != q.shape:
+                raise ValueError(f'{name} has shape {rates[name].shape}; pass {q.shape}, like '
+                                 'positions')
     points = [
-        JointTrajectoryPoint(positions=row, time_from_start=seconds_to_duration(time))
-        for row, time in zip(q.tolist(), t.tolist(), strict=True)
+        JointTrajectoryPoint(positions=row, time_from_start=seconds_to_duration(time),
+                             **{name: values[i].tolist() for name, values in rates.items()})
+        for i, (row, time) in enumerate(zip(q.tolist(), t.tolist(), strict=True))
     ]
     return JointTrajectory(
         header=header,

@@ -131,3 +131,19 @@ def test_create_rejects_duplicate_names():
 def test_create_rejects_a_frame_id_that_is_not_a_string():
     with pytest.raises(ValueError, match='frame_id must be a string'):
         create_joint_trajectory(NAMES, np.zeros((1, 3)), [0.0], frame_id=3)
+
+
+def test_create_fills_velocities_and_accelerations_when_given():
+    msg = create_joint_trajectory(['a', 'b'], [[0.0, 1.0], [0.5, 1.5]], [0.1, 0.2],
+                                  velocities=[[1.0, 2.0], [0.0, 0.0]],
+                                  accelerations=[[3.0, 4.0], [0.0, 0.0]])
+    assert list(msg.points[0].velocities) == [1.0, 2.0]
+    assert list(msg.points[0].accelerations) == [3.0, 4.0]
+    assert list(create_joint_trajectory(['a'], [[0.0]], [0.1]).points[0].velocities) == []
+
+
+@pytest.mark.parametrize('rates', [{'velocities': [[1.0]]},
+                                   {'accelerations': [[math.nan, 0.0]]}])
+def test_create_rejects_rates_unlike_the_positions(rates):
+    with pytest.raises(ValueError):
+        create_joint_trajectory(['a', 'b'], [[0.0, 1.0]], [0.1], **rates)

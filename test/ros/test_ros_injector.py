@@ -10,6 +10,7 @@ from spatial_scenes import JOINTS, TOLERATED, panda_scene
 from std_srvs.srv import Trigger
 
 from ftplan_msgs_py import create_diagnostic_array, create_diagnostic_status, read_locked_joint
+from ftplan_ros.core.model.paths import densify
 from ftplan_ros.execution.motion import time_path
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.injector import (
@@ -73,6 +74,11 @@ def test_a_fraction_drill_is_scheduled_when_the_nominal_command_reaches_it():
     periodic = np.array([True, False, False])
     assert lock_moment(nominal, turned, times[1:], stamp, 0.5, periodic) == moment
     assert lock_moment(nominal, turned, times[1:], stamp, 0.5, ~periodic) is None
+    # Issue 36: the executor's command cuts the path into small steps: it is the path still.
+    fine = densify(nominal, 0.3)
+    fine_times = time_path(fine, 2.0)
+    cut = lock_moment(nominal, fine[1:], fine_times[1:], stamp, 0.5, np.zeros(3, bool))
+    assert len(fine) > len(nominal) and abs(cut - moment) <= 1
     # Any other command (an approach, a recovery, the nominal from elsewhere) is not it.
     for other in (nominal[1:] + 1e-6, nominal[2:], nominal[:2]):
         assert lock_moment(nominal, other, times[1:len(other) + 1], stamp, 0.5,

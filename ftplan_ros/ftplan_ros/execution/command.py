@@ -26,11 +26,15 @@ class Command:
     """Command `path` (k, n) at `times` (k,) [s] from ROS time `stamp_ns` [ns].
 
     Its first point is where the arm was when it was given (the message leaves it out).
+    `velocities` and `accelerations` (k, n) [rad/s, rad/s²] are those of its timing
+    (timing.py); None: positions only.
     """
 
     path: np.ndarray
     times: np.ndarray
     stamp_ns: int
+    velocities: np.ndarray | None = None
+    accelerations: np.ndarray | None = None
 
     def reached(self, stamp_ns: int, q: np.ndarray) -> bool:
         """Whether the arm at q (n,) is where the command puts it at ROS time `stamp_ns` [ns]."""

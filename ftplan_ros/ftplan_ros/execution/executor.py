@@ -45,6 +45,7 @@ from dataclasses import replace
 import numpy as np
 
 from ftplan_ros.core import Robot
+from ftplan_ros.core.model.motion_limits import MotionLimits, robot_motion_limits
 from ftplan_ros.core.model.robot import robot_digest
 
 from .actions import Action, Answer, Moment, Rejected, Status
@@ -65,6 +66,7 @@ class Executor:
         self.options = options
         self.interfaces = interfaces
         self.robot: Robot | None = None
+        self.motion_limits: MotionLimits | None = None  # the robot's, unscaled
         self.names: tuple[str, ...] = ()
         self.plan: HeldPlan | None = None
         self.run: Run | None = None  # the latest run, under way or ended
@@ -92,11 +94,12 @@ class Executor:
 
     # The robot and the plan ---------------------------------------------------------
 
-    def use_robot(self, robot: Robot, now: Moment) -> list[Action]:
-        """Execute with `robot` from now on; a run under way stops and fails.
+    def use_robot(self, robot: Robot, now: Moment, limits: MotionLimits | None = None,
+                  ) -> list[Action]:
+        """Execute with `robot` (its motion `limits`; None: its own) from now on.
 
-        A robot with other joints starts afresh: the plan, the run, the locks and the
-        joint states of the old one are dropped.
+        A run under way stops and fails. A robot with other joints starts afresh: the
+        plan, the run, the locks and the joint states of the old one are dropped.
         """
         if self.active:
             self.run.fail(f'{self.interfaces.robot_source} changed during the execution: '
@@ -107,7 +110,15 @@ class Executor:
             self.locks = JointLocks(list(names))
             self.arm.forget()
         self.robot, self.names = robot, names
+        self.motion_limits = robot_motion_limits(robot) if limits is None else limits
         return self.flush()
+
+    def commanded_limits(self) -> MotionLimits:
+        """Return the limits commands are timed within: the robot's, scaled, speed capped."""
+        options = self.options
+        scaled = self.motion_limits.scaled(options.max_velocity_scaling_factor,
+                                           options.max_acceleration_scaling_factor)
+        return replace(scaled, velocity=np.minimum(scaled.velocity, options.max_joint_speed))
 
     def hold(self, plan: HeldPlan, now: Moment) -> list[Action]:
         """Hold `plan` for the next run."""

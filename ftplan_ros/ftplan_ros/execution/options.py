@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from ftplan_ros.core import CollisionChecker
+from ftplan_ros.core.planning.timing import DEFAULT_MAX_STEP
 
 from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE
 
@@ -21,7 +22,10 @@ LONGEST_LEAD = 1.0  # [s] of the nominal path's command: a longer pause would on
 class ExecutorOptions:
     """Speeds [rad/s], tolerances [rad] and times [s] of the executor (the node's parameters)."""
 
-    max_joint_speed: float = 1.0      # fastest joint speed of the commanded trajectories
+    max_joint_speed: float = 1.0      # cap on every joint's speed, below the robot's limits
+    max_velocity_scaling_factor: float = 1.0      # (0, 1] of the robot's velocity limits
+    max_acceleration_scaling_factor: float = 1.0  # (0, 1] of its acceleration (and jerk) limits
+    max_step: float = DEFAULT_MAX_STEP  # farthest a joint moves between two commanded points
     arrival_tolerance: float = 1e-6   # joint error at which a command counts as completed
     max_path_offset: float = 1e-6     # farthest the stopped arm may be from the nominal path
     path_tolerance: float = 0.1       # farthest the arm may be from its command: tracking error

@@ -31,23 +31,30 @@ class WayOn:
     level: str = 'OK'
 
 
-def within_surface(ex: Execution, q: np.ndarray, name: str, max_offset: float) -> WayOn:
+def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
+                   max_offset: float) -> WayOn:
     """Recover in the run's S_F from q (n,), where its locked joint `name` stopped.
 
-    `max_offset` [rad] is how far q may lie from the nominal path.
+    `start` (n,) is where on the nominal path the arm braked from (q when it stopped on
+    the path): the path goes straight back there, inside the certified braking box, then
+    on in S_F. `max_offset` [rad] is how far `start` may lie from the nominal path.
     """
     progress, tolerated = ex.lock_progress, ex.plan.tolerated
     try:
-        rescue, problem = recover(ex.surface, q, ex.locked_joint, max_offset), ''
+        rescue, problem = recover(ex.surface, start, ex.locked_joint, max_offset), ''
     except InputError as error:
         rescue, problem = None, str(error)
     if rescue is None:
         return WayOn(None, float('nan'), no_recovery(name, progress, tolerated, problem))
     note = '' if name in tolerated else \
         ' (not tolerated by this plan, but S_F holds a recovery path)'
-    return WayOn(rescue.path, rescue.length, f'{name} locked at {progress:.1%} of the nominal '
-                 f'path{note}: following the recovery path ({len(rescue.path)} points, '
-                 f'{rescue.length:.3f} rad)')
+    path, length = rescue.path, rescue.length
+    if np.any(start != q):
+        path = np.vstack([q[None, :], path])
+        length += float(np.linalg.norm(start - q))
+    return WayOn(path, length, f'{name} locked at {progress:.1%} of the nominal '
+                 f'path{note}: following the recovery path ({len(path)} points, '
+                 f'{length:.3f} rad)')
 
 
 def with_joints_left(planner: ApproachPlanner, ex: Execution, q: np.ndarray, name: str,

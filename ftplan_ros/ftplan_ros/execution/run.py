@@ -14,13 +14,16 @@ from typing import Protocol
 import numpy as np
 
 from ftplan_ros.core import FailureSurface, Robot, task_errors
+from ftplan_ros.core.collision.braking import lock_point, segment_speeds
 from ftplan_ros.core.model.angles import configuration_difference, whole_turns
+from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
+from ftplan_ros.core.planning.timing import braking_speed_scaling, slowed, time_within_limits
 
 from .actions import Action, Moment, Stop
 from .command import Command
 from .locks import JointLocks
-from .motion import progress_along, time_path
+from .motion import progress_along
 from .options import ExecutorOptions, Interfaces, Obstacles
 from .recovery import lock_message, with_joints_left, within_surface
 from .state import Execution, ScheduledLock, State
@@ -37,6 +40,9 @@ class Host(Protocol):
     interfaces: Interfaces
     locks: JointLocks
     arm: JointStates
+
+    def commanded_limits(self) -> MotionLimits:
+        """Return the motion limits the commands are timed within (scaled)."""
 
     def given_approach(self, key: str) -> np.ndarray | None:
         """Return the planner's approach (k, n) of plan `key`, if it sent one."""
@@ -158,8 +164,13 @@ class Run:
         return planner.approach(q, theta_s, arrival)
 
     def _begin_nominal(self, now: Moment) -> None:
-        if self._command(self.record.nominal, now, self.host.options.nominal_lead):
-            self.set_state(State.NOMINAL, 'following the nominal path', now)
+        """Command the nominal path, slowed so that a lock anywhere on it brakes certified."""
+        speed = self._command(self.record.nominal, now, self.host.options.nominal_lead,
+                              braking=True)
+        if speed:
+            slower = '' if speed == 1.0 else \
+                f' at {speed:.0%} of its time-optimal speed (the braking after a lock certified)'
+            self.set_state(State.NOMINAL, f'following the nominal path{slower}', now)
 
     def _finish(self, q: np.ndarray, now: Moment) -> None:
         """Done: report the task errors [m, rad] from the plan's goal."""
@@ -173,24 +184,42 @@ class Run:
                                             robot.task_kind in ('axis', 'pose') else '')
         self.set_state(State.DONE, f'reached the goal ({how}), error {error}', now)
 
-    def _command(self, path: np.ndarray, now: Moment, lead: float = 0.0) -> bool:
-        """Command `path` (k, n), whose first point is where the arm is; False if refused.
+    def _command(self, path: np.ndarray, now: Moment, lead: float = 0.0,
+                 braking: bool = False) -> float:
+        """Command `path` (k, n), whose first point is where the arm is; 0 if refused.
 
-        The command starts `lead` [s] after now: its stamp. A path that would move a
-        locked joint is never commanded: the arm is stopped and the run fails instead
-        (that would be a bug of the executor).
+        Returns the fraction (0, 1] of the time-optimal speed commanded: with `braking`,
+        the largest at which a lock anywhere on the path brakes, within the commanded
+        accelerations, inside a box certified free (core/planning/timing.py); none
+        certified fails the run.
+
+        The command starts `lead` [s] after now: its stamp; it is timed within the
+        host's commanded limits, in steps of at most `max_step` (timing.py). A path that
+        would move a locked joint is never commanded: the arm is stopped and the run fails
+        instead (that would be a bug of the executor).
         """
         moved = self.host.locks.moved(path)
         if moved:
             self.fail(f'refused to command a path that moves locked joint {moved}: the arm is '
                       'stopped (please report)', now)
-            return False
+            return 0.0
         ex = self.record
-        ex.command = Command(path, time_path(path, self.host.options.max_joint_speed),
-                             now.ros_ns + round(lead * 1e9))
+        limits = self.host.commanded_limits()
+        timed = time_within_limits(path, limits, self.host.options.max_step)
+        speed = braking_speed_scaling(self.host.obstacles.checker, timed,
+                                      limits.acceleration) if braking else 1.0
+        if speed <= 0.0:
+            self.fail('no speed of the nominal path is certified to brake clear of the '
+                      'obstacles after a lock: stopped; plan again (with a margin)', now)
+            return 0.0
+        timed = slowed(timed, 1.0 / speed) if speed < 1.0 else timed
+        ex.command = Command(timed.positions, timed.times, now.ros_ns + round(lead * 1e9),
+                             timed.velocities, timed.accelerations)
         ex.commanded = now.monotonic
+        if braking:
+            ex.nominal_command, ex.braking = ex.command, limits.acceleration
         self.host.emit(ex.command)
-        return True
+        return speed
 
     # Locks --------------------------------------------------------------------------
 
@@ -242,15 +271,31 @@ class Run:
         if ex.lock_phase == State.APPROACHING:
             way = with_joints_left(self._planner(), ex, q, name)
         else:
-            ex.lock_progress, _ = progress_along(ex.nominal, q)
+            start = self._lock_point(q)
+            ex.lock_progress, _ = progress_along(ex.nominal, start)
             ex.progress = ex.lock_progress
-            way = within_surface(ex, q, name, options.max_path_offset)
+            way = within_surface(ex, q, start, name, options.max_path_offset)
         if way.path is None:
             self.fail(way.message, now)  # the arm stands still: keep it so
             return
         ex.recovery_length = way.length
         if self._command(way.path, now):
             self.set_state(State.RECOVERING, way.message, now, level=way.level)
+
+    def _lock_point(self, q: np.ndarray) -> np.ndarray:
+        """Return where on the nominal path the arm, stopped at q (n,), braked from.
+
+        The point of the locked joint's angle whose certified braking box holds q
+        (core/collision/braking.py); q itself when none does (the arm stopped on the path,
+        or off every box: recovery then refuses it).
+        """
+        ex = self.record
+        sent = ex.nominal_command
+        if sent is None or len(sent.path) < 2:
+            return q
+        speeds = segment_speeds(sent.path, sent.velocities, sent.times)
+        p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint)
+        return q if p is None else p
 
     # Obstacles ----------------------------------------------------------------------
 

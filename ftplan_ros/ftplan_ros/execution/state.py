@@ -61,6 +61,8 @@ class Execution:
     surface: FailureSurface          # the plan's S_F shifted by whole turns to the arm's lift
     started: float                   # monotonic [s]
     command: Command | None = None   # the command under way
+    nominal_command: Command | None = None   # the nominal path's, as sent: its braking boxes
+    braking: np.ndarray | None = None        # [rad/s²] (n,) the deceleration they assume
     scheduled_lock: ScheduledLock | None = None
     progress: float = 0.0            # fraction of the nominal path's length done
     locked_joint: int | None = None

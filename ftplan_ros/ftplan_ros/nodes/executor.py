@@ -51,6 +51,11 @@ from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import create_joint_trajectory, read_joint_trajectory
 from ftplan_ros.core import InputError, Robot, Scene, load_kernels
+from ftplan_ros.core.io.limits_file import load_joint_limits
+from ftplan_ros.core.model.motion_limits import (
+    MotionLimits,
+    robot_motion_limits,
+)
 from ftplan_ros.execution.actions import Action, Answer, Moment, Rejected, Status, Stop
 from ftplan_ros.execution.command import Command
 from ftplan_ros.execution.executor import Executor
@@ -125,7 +130,20 @@ class ExecutorNode(Node):
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', _DEFAULTS.max_joint_speed,
-                'Fastest joint speed [rad/s] of the commanded trajectories.')
+                'Cap [rad/s] on every joint\'s speed in the commanded trajectories, below '
+                'the robot\'s velocity limits.')
+        declare(self, 'max_velocity_scaling_factor', _DEFAULTS.max_velocity_scaling_factor,
+                'Fraction (0, 1] of the robot\'s velocity limits the commands use (MoveIt\'s).')
+        declare(self, 'max_acceleration_scaling_factor',
+                _DEFAULTS.max_acceleration_scaling_factor,
+                'Fraction (0, 1] of the robot\'s acceleration (and jerk) limits the commands '
+                'use (MoveIt\'s).')
+        declare(self, 'max_step', _DEFAULTS.max_step,
+                'Farthest [rad] any joint moves between two commanded points.')
+        declare(self, 'joint_limits_file', '',
+                'MoveIt joint_limits.yaml whose velocity, acceleration and jerk limits replace '
+                'the robot\'s (empty: the robot\'s own: URDF velocity, the robot file\'s '
+                'joint_limits, else the defaults).', read_only=True)
         declare(self, 'arrival_tolerance', _DEFAULTS.arrival_tolerance,
                 'Largest joint error [rad] at which a command counts as completed. The sim '
                 'lands exactly; raise it (with max_path_offset) for a real arm.')
@@ -166,6 +184,8 @@ class ExecutorNode(Node):
                 'idle).', read_only=True)
         validators = {field.name: positive for field in fields(ExecutorOptions)}
         validators['status_rate'] = positive
+        for name in ('max_velocity_scaling_factor', 'max_acceleration_scaling_factor'):
+            validators[name] = _scaling_factor
         validators['nominal_lead'] = lambda value: non_negative(value) or (
             None if value <= LONGEST_LEAD else f'must be at most {LONGEST_LEAD} s, got {value}')
         check_startup_parameters(self, validators)
@@ -176,6 +196,14 @@ class ExecutorNode(Node):
         """Return the logic's options from the parameters of the same names."""
         return ExecutorOptions(**{field.name: float(self.get_parameter(field.name).value)
                                   for field in fields(ExecutorOptions)})
+
+    def _motion_limits(self, robot: Robot) -> MotionLimits | None:
+        """Return the limits of `joint_limits_file` for `robot` (None: none given)."""
+        path = self.get_parameter('joint_limits_file').value
+        if not path:
+            return None
+        return load_joint_limits(path, robot.joint_names, robot_motion_limits(robot),
+                                 'joint_limits_file')
 
     def _parameters_set(self, parameters: list[Parameter]) -> None:
         self.logic.options = self._options()
@@ -207,8 +235,12 @@ class ExecutorNode(Node):
     # The robot ----------------------------------------------------------------------
 
     def _use_scene(self, scene: Scene) -> None:
-        """Execute with `scene`'s robot from now on (a run under way stops and fails)."""
-        self._perform(self.logic.use_robot(scene.robot, self._now()))
+        """Execute with `scene`'s robot from now on (a run under way stops and fails).
+
+        Raises InputError, with nothing changed, when joint_limits_file does not fit it.
+        """
+        limits = self._motion_limits(scene.robot)
+        self._perform(self.logic.use_robot(scene.robot, self._now(), limits))
         load_kernels(scene.robot)  # approaches along M_s trace with it
         problems = self._obstacles.rebase(scene)
         self.scene, self.names = scene, list(scene.robot.joint_names)
@@ -217,7 +249,11 @@ class ExecutorNode(Node):
 
     def _scene_changed(self, scene: Scene) -> None:
         """Take a new robot from /robot_description (stopping an execution under way)."""
-        self._use_scene(scene)
+        try:
+            self._use_scene(scene)
+        except InputError as error:
+            self._report(f'robot from {ROBOT_DESCRIPTION} refused: {error}', 'ERROR', log=True)
+            return
         self._assemble_plan()
         self._report(f'robot from {ROBOT_DESCRIPTION}: {len(self.names)} joints', log=True)
 
@@ -367,7 +403,10 @@ class ExecutorNode(Node):
             if isinstance(action, Command):
                 self.command_publisher.publish(create_joint_trajectory(
                     self.names, action.path[1:], action.times[1:],
-                    Time(nanoseconds=action.stamp_ns).to_msg()))
+                    Time(nanoseconds=action.stamp_ns).to_msg(),
+                    velocities=None if action.velocities is None else action.velocities[1:],
+                    accelerations=None if action.accelerations is None else
+                    action.accelerations[1:]))
             elif isinstance(action, Stop):
                 self.command_publisher.publish(JointTrajectory(joint_names=self.names))
             elif isinstance(action, Status):
@@ -430,3 +469,8 @@ def status_values(status: Status) -> dict[str, object]:
 def main(args=None) -> int:
     """Run the executor node until Ctrl-C; exit code 2 for a bad scene or parameter."""
     return run_node(ExecutorNode, EXECUTOR_NODE, args)
+
+
+def _scaling_factor(value: float) -> str | None:
+    """Validate a scaling factor: in (0, 1]."""
+    return positive(value) or (None if value <= 1.0 else f'must be at most 1, got {value!r}')

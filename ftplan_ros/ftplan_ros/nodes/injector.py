@@ -54,7 +54,7 @@ from ftplan_msgs_py import (
     time_to_nanoseconds,
 )
 from ftplan_ros.core.model.angles import configuration_difference
-from ftplan_ros.execution.motion import time_at_fraction
+from ftplan_ros.execution.motion import progress_along, time_at_fraction
 
 from .params import (
     add_validators,
@@ -80,7 +80,8 @@ from .topics import (
 )
 
 # [rad] How far a command may be from the nominal path and still be it (the executor sends
-# the very numbers of /ftplan/plan/trajectory, shifted by whole turns at most).
+# the very numbers of /ftplan/plan/trajectory, shifted by whole turns at most, with points
+# between them on its segments: execution timing cuts it into small steps).
 _SAME_PATH = 1e-9
 _DRILL = re.compile(r'^\s*([^@\s]+)\s*@\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s?)\s*$')
 _RUNNING = ('approaching', 'nominal')
@@ -151,17 +152,34 @@ def lock_moment(nominal: np.ndarray, positions: np.ndarray, times: np.ndarray,
                 stamp_ns: int, fraction: float, periodic: np.ndarray) -> int | None:
     """Return when [ns, ROS time] a command reaches `fraction` of the nominal path (k, n).
 
-    The command holds positions (k - 1, n) [rad] at times (k - 1,) [s] from `stamp_ns`:
-    the executor commands the nominal path from its first point, where the arm stands, so
-    it sends the points after it (whole turns of `periodic` joints apart, in the arm's
-    lift). None when the command is not the nominal path.
+    The command holds positions (m, n) [rad] at times (m,) [s] from `stamp_ns`: the
+    executor commands the nominal path from its first point, where the arm stands, so it
+    sends the points after it (whole turns of `periodic` joints apart, in the arm's lift):
+    every vertex, in order, and points on the segments between them. None when the
+    command is not the nominal path.
     """
-    if len(positions) == 0 or positions.shape != (len(nominal) - 1, nominal.shape[1]) or \
-            np.max(np.abs(configuration_difference(positions, nominal[1:], periodic))) > \
-            _SAME_PATH:
+    if len(positions) == 0 or positions.shape[1] != nominal.shape[1] or np.max(np.abs(
+            configuration_difference(positions[-1], nominal[-1], periodic))) > _SAME_PATH:
         return None
-    seconds = time_at_fraction(nominal, np.concatenate([[0.0], times]), fraction)
+    lifted = nominal + (positions[-1] - nominal[-1])
+    if not _follows(lifted, positions):
+        return None
+    seconds = time_at_fraction(np.vstack([lifted[:1], positions]),
+                               np.concatenate([[0.0], times]), fraction)
     return stamp_ns + round(seconds * 1e9)
+
+
+def _follows(path: np.ndarray, points: np.ndarray) -> bool:
+    """Whether `points` (m, n) are path[1:] (k, n) in order with points on its segments between."""
+    at = 0
+    for vertex in path[1:]:
+        gaps = np.max(np.abs(points[at:] - vertex), axis=1)
+        found = np.flatnonzero(gaps <= _SAME_PATH)
+        if len(found) == 0:
+            return False
+        at += int(found[0]) + 1
+    return at == len(points) and all(
+        progress_along(path, q)[1] <= _SAME_PATH for q in points)
 
 
 def random_drill(rng: np.random.Generator, joint_names: Sequence[str]) -> Drill:

@@ -12,8 +12,9 @@ round, is refused: inputs.py), slowed down where a command asks for more than
 `max_joint_speed`; an empty trajectory stops it; a stamped command starts at its stamp. A
 failure event on /ftplan/locked_joint locks that joint where it is (or at the angle given,
 which must lie within `lock_angle_tolerance` of where it is: a joint cannot jump, so an
-event farther off is refused and reported) for good, and the arm brakes
-(`brake_on_lock`) until a new command arrives. An event stamped ahead of where the arm is
+event farther off is refused and reported) for good, and the free joints brake
+(`brake_on_lock`) within the robot's acceleration limits to a stop, until a new command
+arrives. An event stamped ahead of where the arm is
 on its command (a drill's scheduled failure, injector.py) locks the joint exactly where
 the command puts the arm at that moment.
 
@@ -217,7 +218,8 @@ class SimNode(Node):
                 'config/robots/panda_mujoco.yaml; "": the installed *_mujoco.yaml naming '
                 'the robot\'s joints, else the defaults).', read_only=True)
         declare(self, 'brake_on_lock', _DEFAULTS.brake_on_lock,
-                'Stop every joint when one locks, until the next command.')
+                'When a joint locks, brake the others to a stop at the robot\'s acceleration '
+                'limits (the executor certifies that braking), until the next command.')
         declare(self, 'lock_angle_tolerance', _DEFAULTS.lock_angle_tolerance,
                 'Farthest a lock event\'s angle may be from where the joint is [rad]; events '
                 'beyond it are refused (a joint locks where it stands).')

@@ -28,7 +28,7 @@ class ArmOptions:
     """How the arm moves and locks (the sim node's parameters of the same names)."""
 
     max_joint_speed: float = 2.0         # [rad/s] of every joint; faster commands slow down
-    brake_on_lock: bool = True           # a lock stops every joint until the next command
+    brake_on_lock: bool = True           # a lock brakes the free joints (acceleration limits)
     lock_angle_tolerance: float = DEFAULT_LOCK_ANGLE_TOLERANCE  # [rad] from where the joint is
 
 

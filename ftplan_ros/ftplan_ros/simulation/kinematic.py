@@ -3,12 +3,14 @@
 From where it is through the points of a command at their times (linear in joint space),
 slowed down segment by segment where a command asks for more than `max_joint_speed`; a
 stamped command starts at its stamp (one that came late starts late, and all its moments
-with it). A lock holds its joint for good and, with `brake_on_lock`, stops the arm until
-the next command (the paper assumes the failure is detected and the arm stops), so the
-arm stays exactly on its path; later commands move only the free joints. A lock stamped
-ahead of where the arm is on its command (a drill) waits for that moment of the command
-and locks the joint exactly where the command puts the arm then, between two steps too;
-at the end of the command at the latest. See arm.py for the interface and its units.
+with it). A lock holds its joint for good and, with `brake_on_lock`, brakes the arm until
+the next command: each other joint decelerates from the speed it had, at the robot's
+acceleration limit (core/model/motion_limits.py), to a stop v_j² / (2 a_j) further on,
+as the executor's braking certificate assumes; later commands move only the free
+joints. A lock stamped ahead of where the arm is on its command (a drill) waits for
+that moment of the command and locks the joint exactly where the command puts the arm
+then, between two steps too; at the end of the command at the latest. See arm.py for
+the interface and its units.
 """
 
 from __future__ import annotations
@@ -17,11 +19,13 @@ import numpy as np
 
 from ftplan_ros.core import Robot
 from ftplan_ros.core.model.angles import configuration_difference
+from ftplan_ros.core.model.motion_limits import robot_motion_limits
 from ftplan_ros.execution.locks import lock_angle_problem
 
 from .arm import ArmOptions, Following, HeldJoint, Locked, LockOutcome, Refused, Scheduled, Step
 
 _LOCK_SNAP_TOLERANCE = 1e-9  # [rad]
+_BRAKING_SAMPLES = 20        # moments of a braking motion (linear between: inside its box)
 
 
 class Motion:
@@ -48,6 +52,14 @@ class Motion:
         """
         commanded = (stamp_ns - self.stamp_ns) * 1e-9
         return self.start + float(np.interp(commanded, self.commanded, self.times))
+
+    def velocity(self, now: float) -> np.ndarray:
+        """Return the joint velocities (n,) [rad/s] at the arm's time `now` (0 outside it)."""
+        t = now - self.start
+        if t < 0.0 or t >= self.times[-1]:
+            return np.zeros(self.positions.shape[1])
+        i = int(np.searchsorted(self.times, t, side='right')) - 1
+        return (self.positions[i + 1] - self.positions[i]) / (self.times[i + 1] - self.times[i])
 
     def sample(self, now: float) -> tuple[np.ndarray, bool]:
         """Return the configuration at the arm's time `now` and whether the motion is over."""
@@ -132,10 +144,17 @@ class KinematicArm:
         if stamp_ns and self.motion is not None and self.motion.time_of(stamp_ns) > self.time:
             self._scheduled.append((joint, angle, stamp_ns))
             return Scheduled(joint, self.motion.time_of(stamp_ns) - self.time)
-        return self._lock(joint, angle)
+        return self._lock(joint, angle, self._velocity(self.time))
 
-    def _lock(self, joint: int, angle: float | None) -> Locked | Refused:
-        """Lock `joint` where it is (or at `angle`, within lock_angle_tolerance); brake."""
+    def _velocity(self, now: float) -> np.ndarray:
+        """Return the joint velocities (n,) [rad/s] of the motion under way at time `now` [s]."""
+        return np.zeros(len(self.q)) if self.motion is None else self.motion.velocity(now)
+
+    def _lock(self, joint: int, angle: float | None, velocity: np.ndarray) -> Locked | Refused:
+        """Lock `joint` where it is (or at `angle`, within tolerance); brake from `velocity`.
+
+        `velocity` (n,) [rad/s] is the arm's at the lock.
+        """
         current = float(self.q[joint])
         periodic = bool(self.robot.periodic[joint])
         problem = lock_angle_problem(self.robot.joint_names[joint], angle, current, periodic,
@@ -151,8 +170,26 @@ class KinematicArm:
             jump, self.q = np.stack([self.q, jumped]), jumped
         self.locked[joint] = value
         if self.options.brake_on_lock:
-            self.motion = None
+            self.motion = self._braking(velocity)
         return Locked(joint, value, jump)
+
+    def _braking(self, velocity: np.ndarray) -> Motion | None:
+        """Return the motion of the free joints braking from `velocity` (n,) [rad/s], if any.
+
+        Each decelerates at its acceleration limit a_j: it stops |v_j| / a_j later,
+        v_j² / (2 a_j) further on, moving one way (sampled at _BRAKING_SAMPLES moments).
+        """
+        velocity = velocity.copy()
+        velocity[list(self.locked)] = 0.0
+        deceleration = robot_motion_limits(self.robot).acceleration
+        stops = np.abs(velocity) / deceleration
+        if not np.any(stops > 0.0):
+            return None
+        t = np.linspace(0.0, float(stops.max()), _BRAKING_SAMPLES)[:, None]
+        t = np.minimum(t, stops[None, :])
+        moved = np.abs(velocity) * t - 0.5 * deceleration * t ** 2
+        return Motion(self.q + np.sign(velocity) * moved,
+                      np.linspace(0.0, float(stops.max()), _BRAKING_SAMPLES), self.time)
 
     def step(self, dt: float) -> Step:
         """Move on by `dt` [s]: along the command, up to a scheduled lock due meanwhile."""
@@ -160,6 +197,7 @@ class KinematicArm:
         previous = self.q
         until, due = self._due_locks(before, self.time)
         swept = None
+        velocity = self._velocity(until)
         if self.motion is not None:
             swept, finished = self.motion.swept(before, until)
             swept[0] = previous
@@ -168,7 +206,7 @@ class KinematicArm:
             self.q = swept[-1].copy()
             if finished:
                 self.motion = None
-        return Step(swept, [self._lock(joint, angle) for joint, angle in due])
+        return Step(swept, [self._lock(joint, angle, velocity) for joint, angle in due])
 
     def _due_locks(self, before: float, now: float) -> tuple[float, list[tuple[int, float | None]]]:
         """Take the scheduled locks due by time `now` [s]; return when the first is due.

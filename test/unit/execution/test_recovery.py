@@ -111,9 +111,10 @@ def test_a_tolerated_joint_without_a_recovery_path_says_the_guarantee_is_broken(
 
 
 def test_an_arm_stopped_off_the_nominal_path_cannot_recover(rig):
-    """Farther than max_path_offset from the path, the core refuses to recover from it."""
+    """Outside every braking box and farther than max_path_offset from the path, the core
+    refuses to recover from it."""
     lock_on_nominal(rig)
-    rig.q = rig.q + [0.01, 0.0, 0.0]
+    rig.q = rig.q + [0.5, 0.0, 0.0]
     message = failure(rig.stand())
     assert message.startswith('cannot recover from joint2 locked at ')
     assert message.endswith('; the arm is stopped there')
@@ -149,3 +150,15 @@ def test_a_lock_on_the_approach_without_a_way_to_the_goal_fails(make_rig):
     assert failure(rig.stand()) == (
         'joint1 locked while approaching theta_s (not failure-tolerant) and no collision-free '
         'configuration reaches the goal with joint1 locked; the arm is stopped where it is')
+
+
+def test_an_arm_braked_off_the_path_inside_its_box_goes_back_to_the_lock_point_first(rig):
+    """Issue 36, item 3: braking leaves the path (within the certified box); the recovery
+    goes straight back to where the joint locked, then on in S_F."""
+    lock_on_nominal(rig)
+    locked_at = rig.q.copy()
+    rig.q = rig.q + [0.002, 0.0, -0.002]
+    [command] = commands(rig.stand())
+    assert np.allclose(command.path[0], rig.q, atol=1e-12)
+    assert np.allclose(command.path[1], locked_at, atol=1e-9)
+    assert np.all(command.path[:, 1] == locked_at[1])

@@ -234,7 +234,7 @@ def test_a_robot_yaml_names_its_urdf_relative_to_itself(tmp_path):
 
 
 def test_the_shipped_robot_yamls_copied_elsewhere_still_load(tmp_path):
-    for name in ('panda.yaml', 'panda.urdf'):
+    for name in ('panda.yaml', 'panda.urdf', 'panda_joint_limits.yaml'):
         shutil.copy(ROBOTS / name, tmp_path / name)
     (tmp_path / 'scene.yaml').write_text('robot: panda.yaml\n')
     robot = load_scene(tmp_path / 'scene.yaml').robot

@@ -49,7 +49,8 @@ def test_the_panda_srdf_gives_the_pairs_of_panda_yaml():
 def test_a_robot_yaml_takes_srdf_relative_to_itself(tmp_path):
     robot = yaml.safe_load((ROBOTS / 'panda.yaml').read_text())['robot']
     del robot['disabled_collisions']
-    robot.update(file=str(PANDA_URDF), srdf=str(PANDA_SRDF.relative_to(ROBOTS.parent)))
+    robot.update(file=str(PANDA_URDF), srdf=str(PANDA_SRDF.relative_to(ROBOTS.parent)),
+                 joint_limits=str(ROBOTS / robot['joint_limits']))
     (tmp_path / 'robots').mkdir()
     (tmp_path / 'robots' / 'arm.yaml').write_text(yaml.safe_dump({'robot': robot}))
     (tmp_path / 'scene.yaml').write_text('robot: robots/arm.yaml\n')
@@ -64,7 +65,8 @@ def test_a_robot_yaml_takes_srdf_relative_to_itself(tmp_path):
 
 def test_srdf_and_disabled_collisions_together_are_refused(tmp_path):
     robot = yaml.safe_load((ROBOTS / 'panda.yaml').read_text())['robot']
-    robot.update(file=str(PANDA_URDF), srdf=str(PANDA_SRDF))
+    robot.update(file=str(PANDA_URDF), srdf=str(PANDA_SRDF),
+                 joint_limits=str(ROBOTS / robot['joint_limits']))
     (tmp_path / 'scene.yaml').write_text(yaml.safe_dump({'robot': robot}))
     with pytest.raises(InputError, match='robot.srdf: and robot.disabled_collisions both give '
                        'the self-collision exceptions: keep one of them'):

@@ -69,17 +69,20 @@ def test_a_command_stamped_ahead_starts_at_its_stamp():
     assert np.allclose(sim.q, [0.5, 0.0, 0.0], atol=1e-12, rtol=0)
 
 
-def test_a_lock_brakes_the_arm_and_later_commands_hold_the_locked_joint():
+def test_a_lock_brakes_the_arm_within_the_acceleration_limits_and_later_commands_hold_it():
+    """Issue 36: at 2 rad/s, braking at the default 2 rad/s² takes 1 s and 1 rad."""
     sim = arm()
     sim.follow(np.array([[3.0, 3.0, 3.0]]), np.array([1.5]), NOW, NOW)
     run(sim, 0.5)
     outcome = sim.lock(1, None, 0)
     assert isinstance(outcome, Locked) and outcome.jump is None
     assert outcome.angle == pytest.approx(1.0)
-    assert not sim.moving and sim.locked == {1: outcome.angle}
+    assert sim.moving and sim.locked == {1: outcome.angle}  # braking
+    run(sim, 0.5)
+    assert np.allclose(sim.q, [1.75, 1.0, 1.75], atol=1e-2)  # 2 t - t², sampled
+    run(sim, 0.6)
+    assert not sim.moving and np.allclose(sim.q, [2.0, 1.0, 2.0])
     stopped = sim.q.copy()
-    run(sim, 0.2)
-    assert np.array_equal(sim.q, stopped)                   # braked
     following = sim.follow(np.array([[0.0, 0.0, 0.0]]), np.array([2.0]), NOW, NOW)
     assert following.held == (HeldJoint(1, pytest.approx(1.0), outcome.angle),)
     run(sim, 2.1)
@@ -105,9 +108,10 @@ def test_a_scheduled_lock_lands_exactly_where_the_command_puts_the_arm_at_its_st
     assert outcome == Scheduled(1, pytest.approx(0.9537))
     assert sim.lock(1, None, 0) is None                     # scheduled already
     steps = run(sim, 1.5)
-    [locked] = [lock for step in steps for lock in step.locks]
+    [(step, locked)] = [(step, lock) for step in steps for lock in step.locks]
     assert isinstance(locked, Locked) and locked.angle == pytest.approx(0.3074, abs=1e-12)
-    assert np.allclose(sim.q, [1.0, 0.3074, 0.1537], atol=1e-12, rtol=0)
+    assert np.allclose(step.swept[-1], [1.0, 0.3074, 0.1537], atol=1e-12, rtol=0)
+    assert np.allclose(sim.q, [1.0, 0.3074, 0.1537 + 0.25])  # braked from 1 rad/s at 2 rad/s²
     assert not sim.moving
 
 
@@ -119,8 +123,9 @@ def test_a_lock_scheduled_on_a_command_that_started_late_lands_late_with_it():
     sim.lock(2, None, stamp + round(0.5e9))
     run(sim, 0.45)
     assert sim.locked == {}
-    run(sim, 0.1)
-    assert sim.locked == {2: 0.0} and np.allclose(sim.q, [0.5, 0.0, 0.0], atol=1e-12, rtol=0)
+    [step] = [step for step in run(sim, 0.1) if step.locks]
+    assert sim.locked == {2: 0.0}
+    assert np.allclose(step.swept[-1], [0.5, 0.0, 0.0], atol=1e-12, rtol=0)
 
 
 def test_a_scheduled_lock_takes_effect_at_once_when_the_command_is_stopped():

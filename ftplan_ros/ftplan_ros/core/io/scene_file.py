@@ -35,6 +35,7 @@ from ..model.urdf import chain_from_urdf
 from ..model.urdf_structure import read_urdf
 from ..validation import check_keys, mapping, nonnegative, number, sequence, vector
 from .files import load_yaml, read_text
+from .limits_file import load_joint_limits
 from .mesh_files import with_mesh_files
 from .sampled_exceptions import parse_sampling, sampled_exceptions
 
@@ -158,7 +159,7 @@ def _planar_robot(data: Mapping) -> PlanarChain:
 def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
     check_keys(data, 'robot', required=('type', 'file', 'tip_link'),
                 optional=('base_link', 'tip_offset', 'disabled_collisions', 'srdf', 'mesh_dirs',
-                          'self_collision_sampling'))
+                          'self_collision_sampling', 'joint_limits'))
     texts = {}
     for key, kind in (('file', 'URDF'), ('srdf', 'SRDF')):
         if key in data:
@@ -170,11 +171,19 @@ def _urdf_chain(data: Mapping, directory: Path) -> ChainModel:
         if not isinstance(folder, str) or not folder:
             raise InputError(f'robot.mesh_dirs[{k}]', 'must be the path of a folder')
         mesh_dirs.append(directory / folder)
-    return robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
-                           data.get('tip_offset', [0.0, 0.0, 0.0]),
-                           data.get('disabled_collisions'), mesh_dirs=mesh_dirs,
-                           srdf=texts.get('srdf'), directory=(directory / data['file']).parent,
-                           self_collision_sampling=data.get('self_collision_sampling')).model
+    model = robot_from_urdf(texts['file'], data['tip_link'], data.get('base_link'),
+                            data.get('tip_offset', [0.0, 0.0, 0.0]),
+                            data.get('disabled_collisions'), mesh_dirs=mesh_dirs,
+                            srdf=texts.get('srdf'), directory=(directory / data['file']).parent,
+                            self_collision_sampling=data.get('self_collision_sampling')).model
+    if 'joint_limits' not in data:
+        return model
+    if not isinstance(data['joint_limits'], str) or not data['joint_limits']:
+        raise InputError('robot.joint_limits', 'must be the path of a joint_limits.yaml file '
+                         '(MoveIt\'s format)')
+    return replace(model, motion_limits=load_joint_limits(
+        directory / data['joint_limits'], model.joint_names, model.motion_limits,
+        'robot.joint_limits'))
 
 
 def _dh_chain(data: Mapping) -> ChainModel:

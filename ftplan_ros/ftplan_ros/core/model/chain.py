@@ -2,7 +2,8 @@
 
 `ChainModel` is what a URDF (urdf.py) or a DH table (dh.py) comes down to: for each
 joint its frame in its parent's at zero angle and its unit axis, the tool frame in the
-last joint's, joint limits, and the collision shapes of every link in the link's frame.
+last joint's, joint limits (position; velocity, acceleration and jerk in
+`motion_limits`), and the collision shapes of every link in the link's frame.
 Link 0 is the base; link j >= 1 is the body joint j-1 turns, and its frame is that
 joint's. Lengths [m], angles [rad]. `SpatialArm` (spatial.py) binds it to a task.
 """
@@ -15,6 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from . import kinematics
+from .motion_limits import MotionLimits
 from .robot import LinkShape
 
 
@@ -29,6 +31,8 @@ class ChainModel:
     first. `disabled_pairs` are link pairs never checked for self-collision;
     `exempt_urdf_pairs` are pairs of URDF links whose shapes are never checked, also
     where their chain links are (an SRDF's exemptions of links folded into others).
+    `motion_limits` are the joints' velocity, acceleration and jerk limits (None: the
+    defaults of motion_limits.py).
     """
 
     name: str
@@ -42,6 +46,7 @@ class ChainModel:
     disabled_pairs: frozenset[tuple[int, int]] = field(default_factory=frozenset)
     exempt_urdf_pairs: frozenset[frozenset[str]] = field(default_factory=frozenset)
     tool_frame: str = 'tool'
+    motion_limits: MotionLimits | None = None
 
     def __post_init__(self):
         n = len(self.joint_names)

@@ -5,9 +5,11 @@ build, and reads it as it was checked. The chain runs from `base_link` (fixed to
 URDF's root) to `tip_link`: its joints must be revolute or continuous. Joints off that
 path (fingers, a second arm) are locked at zero with Pinocchio's `buildReducedModel`,
 which folds their links' geometry into the chain, and fixed joints are folded in the
-same way. Collision geometry is the links' `<collision>` elements: boxes, cylinders,
-spheres, capsules and meshes (STL, OBJ, COLLADA: loaded by Pinocchio, through coal and
-assimp, from the paths the URDF gives; core/io/mesh_files.py makes them absolute).
+same way. Joint velocity limits are the URDF's (`<limit velocity>`; 0 or none: the
+default of motion_limits.py). Collision geometry is the links' `<collision>` elements:
+boxes, cylinders, spheres, capsules and meshes (STL, OBJ, COLLADA: loaded by Pinocchio,
+through coal and assimp, from the paths the URDF gives; core/io/mesh_files.py makes them
+absolute).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import pinocchio as pin
 from ..errors import InputError
 from .chain import ChainModel
 from .geometry import Shape
+from .motion_limits import default_motion_limits
 from .robot import LinkShape
 from .urdf_structure import UrdfDescription, read_urdf
 
@@ -156,9 +159,10 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
         shapes.append(LinkShape(int(item.parentJoint), _shape(item, where), placement,
                                 model.frames[item.parentFrame].name))
     link_names = [base_link] + [_child_link(model, j) for j in range(1, n + 1)]
+    velocities = [float(model.velocityLimit[model.joints[j].idx_v]) for j in range(1, n + 1)]
     return ChainModel(model.name, tuple(model.names[1:n + 1]), tuple(link_names), placements,
                       _joint_axes(model, where), tool, tuple(limits), tuple(shapes),
-                      tool_frame=tip_link)
+                      tool_frame=tip_link, motion_limits=default_motion_limits(n, velocities))
 
 
 def _joint_axes(model: pin.Model, where: str) -> np.ndarray:

@@ -29,6 +29,7 @@ from ..grid.recovery_sheets import (
     sheets_apply,
     with_sheets,
 )
+from ..model.motion_limits import robot_motion_limits
 from ..model.robot import PlanarChain
 from ..model.scene import Scene
 from ..model.task_space import point_position
@@ -37,6 +38,7 @@ from ..paper.options import PlannerOptions
 from ..paper.result import PlanResult
 from .curves import plan_on_curves
 from .surface_search import SurfaceSearch
+from .timing import braking_speed_scaling, time_within_limits
 
 log = logging.getLogger(__name__)
 
@@ -104,6 +106,9 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
             result = _with_coverage(search, result, report, options.coverage_attempts)
     else:
         result = plan_on_curves(scene, options, rng, report, cache, start_configuration)
+    if result.feasible:
+        result = replace(result, stats=dict(result.stats, max_safe_speed=_max_safe_speed(
+            scene, checker, result.nominal_path, options.verification.margin)))
     stats = {'method': PAPER_METHOD} | dict(result.stats, plan_time_s=time.perf_counter() - started)
     log.info('plan %s in %.3f s%s', 'found' if result.feasible else 'not found',
              stats['plan_time_s'], f': {result.reason}' if result.reason else '')
@@ -181,3 +186,15 @@ def _same_task_point(task) -> bool:
     else:
         return True
     return bool(angle <= task.orientation_tolerance)
+
+
+def _max_safe_speed(scene: Scene, checker: CollisionChecker, nominal_path, margin: float,
+                    ) -> float:
+    """Return the fraction (0..1] of the time-optimal speed that brakes inside certified boxes.
+
+    Of the robot's full limits along the nominal path, at which a lock anywhere on it
+    brakes inside a certified box (timing.py); 0: no speed does.
+    """
+    limits = robot_motion_limits(scene.robot)
+    timed = time_within_limits(np.asarray(nominal_path, dtype=float), limits)
+    return braking_speed_scaling(checker, timed, limits.acceleration, margin)

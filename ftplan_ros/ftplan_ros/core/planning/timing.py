@@ -1,0 +1,150 @@
+"""Timing a certified joint path within the robot's motion limits, on the path itself.
+
+The path (k, n) [rad] is a polyline the planner certified. It is cut into points at most
+`max_step` [rad] apart in every joint (every vertex kept), so a controller that
+interpolates between consecutive points linearly never leaves the polyline, and one
+that takes continuous joints the short way round takes the certified way.
+
+Timing is TOPP-RA's (Pham & Pham, IEEE T-RO 2018; the `toppra` library): time-optimal
+along a GIVEN path under per-joint velocity and acceleration bounds, so the geometry
+stays the certified one. TOPP-RA runs on a cubic spline through the points (it needs a
+path with two derivatives) and is sampled at the points only: the positions sent are the
+polyline's, the velocities and accelerations the spline's tangent times the path speed.
+TOPP-RA bounds neither jerk nor the rates between its grid points; so the result is
+checked at the points sent (the published rates and the finite differences a
+controller sees: Δq/Δt, Δv/Δt, Δa/Δt), and slowed down uniformly (time × k scales
+velocity by 1/k, acceleration by 1/k², jerk by 1/k³) until every check holds. The
+trajectory starts at rest at the path's first point and ends at rest at its last.
+
+`braking_speed_scaling` says how much slower a timing must run for every lock on it to
+brake inside a certified box (collision/braking.py): the planner reports it as
+stats['max_safe_speed'], the executor slows the nominal path's command by it.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+import toppra
+import toppra.algorithm
+import toppra.constraint
+
+from ..collision.braking import max_safe_speed, segment_speeds
+from ..collision.checker import CollisionChecker
+from ..model.motion_limits import MotionLimits
+from ..model.paths import densify
+
+DEFAULT_MAX_STEP = 0.05      # [rad] farthest any joint moves between two points
+_RELATIVE_SLACK = 1e-6       # the checks' numerical tolerance, relative to each limit
+_SHORTEST = 1e-12            # [rad] points closer than this are one point
+_FEWEST_STEPS = 8            # grid intervals of the shortest path
+
+logging.getLogger('toppra').setLevel(logging.WARNING)
+
+
+@dataclass(frozen=True, eq=False)
+class TimedPath:
+    """Points (k, n) at `times` (k,) [s] from 0.
+
+    `positions` [rad], `velocities` [rad/s], `accelerations` [rad/s²].
+    """
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    accelerations: np.ndarray
+    times: np.ndarray
+
+
+def time_within_limits(path: np.ndarray, limits: MotionLimits, max_step: float = DEFAULT_MAX_STEP,
+              ) -> TimedPath:
+    """Time the polyline `path` (k, n) [rad] within `limits` (see the module docstring)."""
+    path = np.asarray(path, dtype=float)
+    # TOPP-RA starts and ends at rest on grid points: a path of one step would get no
+    # speed at all, so every path gets at least _FEWEST_STEPS.
+    span = float(np.sum(np.max(np.abs(np.diff(path, axis=0)), axis=1))) if len(path) > 1 else 0.0
+    step = min(max_step, span / _FEWEST_STEPS) if span > 0.0 else max_step
+    points = _distinct(densify(path, step))
+    n = points.shape[1]
+    if len(points) < 2:
+        zero = np.zeros((1, n))
+        return TimedPath(points[:1].copy(), zero, zero.copy(), np.zeros(1))
+    ss = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    spline = toppra.SplineInterpolator(ss, points)
+    constraints = [
+        toppra.constraint.JointVelocityConstraint(np.column_stack([-limits.velocity,
+                                                                   limits.velocity])),
+        toppra.constraint.JointAccelerationConstraint(np.column_stack([-limits.acceleration,
+                                                                       limits.acceleration])),
+    ]
+    solver = toppra.algorithm.TOPPRA(constraints, spline, gridpoints=ss)
+    sdd, sd, _, _ = solver.compute_parameterization(0.0, 0.0, return_data=True)
+    if sd is None:
+        raise RuntimeError('TOPP-RA found no timing of the path within the limits')
+    sd = np.maximum(np.asarray(sd, dtype=float), 0.0)
+    if not np.all(sd[1:-1] > 0.0):
+        raise RuntimeError('TOPP-RA stops the path between its ends')
+    sdd = np.append(np.asarray(sdd, dtype=float), 0.0)
+    steps = 2.0 * np.diff(ss) / np.maximum(sd[:-1] + sd[1:], 1e-300)
+    times = np.concatenate([[0.0], np.cumsum(steps)])
+    tangent, curvature = spline(ss, 1), spline(ss, 2)
+    velocities = tangent * sd[:, None]
+    accelerations = tangent * sdd[:, None] + curvature * (sd ** 2)[:, None]
+    velocities[[0, -1]] = 0.0
+    accelerations[-1] = 0.0
+    return _slowed_to_limits(TimedPath(points, velocities, accelerations, times), limits)
+
+
+def limit_ratios(timed: TimedPath, limits: MotionLimits) -> tuple[float, float, float]:
+    """Return the largest |velocity|, |acceleration|, |jerk| over their limits of the points.
+
+    Each counts the published rates and the finite differences between points (Δq/Δt,
+    and Δv/Δt, Δa/Δt of the published rates); jerk 0 where no joint has a jerk limit.
+    """
+    dt = np.diff(timed.times)[:, None]
+    velocity = max(_ratio(timed.velocities, limits.velocity),
+                   _ratio(np.diff(timed.positions, axis=0) / dt, limits.velocity))
+    acceleration = max(_ratio(timed.accelerations, limits.acceleration),
+                       _ratio(np.diff(timed.velocities, axis=0) / dt, limits.acceleration))
+    jerk = _ratio(np.diff(timed.accelerations, axis=0) / dt, limits.jerk)
+    return velocity, acceleration, jerk
+
+
+def slowed(timed: TimedPath, factor: float) -> TimedPath:
+    """Return the same points `factor` (>= 1) times slower: v / factor, a / factor²."""
+    return TimedPath(timed.positions, timed.velocities / factor,
+                     timed.accelerations / factor ** 2, timed.times * factor)
+
+
+def braking_speed_scaling(checker: CollisionChecker, timed: TimedPath,
+                          deceleration: np.ndarray, margin: float = 0.0) -> float:
+    """Return the largest speed scaling (at most 1) whose braking boxes certify on `timed`.
+
+    A lock anywhere on it then brakes, at `deceleration` (n,) [rad/s²], inside a
+    certified box (collision/braking.py). 0 when no speed is certified; 1 when the
+    timing's own speeds are.
+    """
+    speeds = segment_speeds(timed.positions, timed.velocities, timed.times) \
+        if len(timed.times) > 1 else np.zeros((0, timed.positions.shape[1]))
+    return min(1.0, max_safe_speed(checker, timed.positions, speeds, deceleration, margin,
+                                   cap=1.0))
+
+
+def _slowed_to_limits(timed: TimedPath, limits: MotionLimits) -> TimedPath:
+    """Stretch time uniformly by the least factor k >= 1 after which every ratio is <= 1."""
+    velocity, acceleration, jerk = limit_ratios(timed, limits)
+    k = max(velocity, float(np.sqrt(acceleration)), float(np.cbrt(jerk)))
+    return timed if k <= 1.0 else slowed(timed, k * (1.0 + _RELATIVE_SLACK))
+
+
+def _ratio(values: np.ndarray, limit: np.ndarray) -> float:
+    if values.size == 0:
+        return 0.0
+    return float(np.max(np.abs(values) / limit))
+
+
+def _distinct(points: np.ndarray) -> np.ndarray:
+    """Drop points that repeat the one before (TOPP-RA needs a strictly increasing grid)."""
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > _SHORTEST])
+    return points[keep]

@@ -1,0 +1,103 @@
+"""Timing within the motion limits (execution/timing.py), replayed point by point."""
+
+import numpy as np
+import pytest
+
+from ftplan_ros.core.model.motion_limits import MotionLimits, default_motion_limits
+from ftplan_ros.core.model.paths import point_at_fraction
+from ftplan_ros.core.planning.timing import TimedPath, braking_speed_scaling, time_within_limits
+
+from .replay import limit_violations
+from .rig import commands
+
+PANDA_LIKE = MotionLimits([2.0, 1.0, 3.0], [15.0, 7.5, 10.0], [7500.0, 3750.0, 5000.0])
+ZIGZAG = np.array([[0.0, 0.0, 0.0], [0.4, 0.3, -0.2], [0.4, -0.5, 0.1], [1.2, -0.5, 0.1],
+                   [1.1, 0.2, 0.6], [1.1, 0.2, 0.6], [0.0, 0.0, 0.0]])
+FREE = np.array([[-np.pi, np.pi]] * 3)
+
+
+def replayed(path, limits, max_step=0.05):
+    timed = time_within_limits(path, limits, max_step)
+    return timed, limit_violations(timed.positions, timed.velocities, timed.accelerations,
+                                   timed.times, limits, FREE, path, max_step)
+
+
+@pytest.mark.parametrize('limits', [default_motion_limits(3), PANDA_LIKE,
+                                    PANDA_LIKE.scaled(0.3, 0.1)])
+def test_a_path_with_sharp_corners_is_timed_on_the_path_within_every_limit(limits):
+    timed, problems = replayed(ZIGZAG, limits)
+    assert problems == []
+    assert np.array_equal(timed.positions[0], ZIGZAG[0])
+    assert np.array_equal(timed.positions[-1], ZIGZAG[-1])
+
+
+def test_jerk_limits_are_kept_by_slowing_down():
+    """TOPP-RA bounds no jerk: the uniform slow-down does; without it the jerk limit breaks."""
+    tight = MotionLimits(PANDA_LIKE.velocity, PANDA_LIKE.acceleration, [20.0, 20.0, 20.0])
+    timed, problems = replayed(ZIGZAG, tight)
+    assert problems == []
+    unbounded = MotionLimits(PANDA_LIKE.velocity, PANDA_LIKE.acceleration, [np.inf] * 3)
+    free = time_within_limits(ZIGZAG, unbounded)
+    assert any('jerk' in problem for problem in limit_violations(
+        free.positions, free.velocities, free.accelerations, free.times, tight, FREE))
+    assert timed.times[-1] > free.times[-1]
+
+
+def test_scaling_slows_the_trajectory_down():
+    fast, _ = replayed(ZIGZAG, PANDA_LIKE)
+    slow, problems = replayed(ZIGZAG, PANDA_LIKE.scaled(0.5, 0.5))
+    assert problems == [] and slow.times[-1] > 1.5 * fast.times[-1]
+
+
+def test_a_path_of_one_short_step_is_timed_too():
+    """An approach of 2 points 0.012 rad apart was timed 1e298 s long (no grid point
+    between its ends at rest)."""
+    timed, problems = replayed(np.array([[0.0, 0.0, 0.0], [0.012, -0.004, 0.0]]), PANDA_LIKE)
+    assert problems == [] and 0.0 < timed.times[-1] < 1.0
+
+
+def test_a_path_of_one_point_is_a_command_to_stay():
+    timed, problems = replayed(ZIGZAG[:1], PANDA_LIKE)
+    assert problems == [] and timed.times.tolist() == [0.0]
+
+
+@pytest.mark.parametrize('max_step', [0.05, 0.01])
+def test_the_fig3a_nominal_path_is_timed_within_the_default_limits(fig3a, max_step):
+    _, result = fig3a
+    _, problems = replayed(np.asarray(result.nominal_path), default_motion_limits(3), max_step)
+    assert problems == []
+
+
+def test_every_command_of_a_run_with_a_lock_replays_within_the_limits(make_rig):
+    """Through the executor: the approach, the nominal path and the recovery."""
+    rig = make_rig(max_joint_speed=10.0, max_velocity_scaling_factor=0.8,
+                   max_acceleration_scaling_factor=0.5)
+    limits = rig.executor.commanded_limits()
+    assert np.allclose(limits.velocity, 0.8) and np.allclose(limits.acceleration, 1.0)
+    sent = [rig.approach([0.3, -0.2, 0.4])]
+    [nominal] = commands(rig.follow(sent[0]))
+    sent.append(nominal)
+    rig.follow(nominal, until=0.4)
+    rig.lock(1)
+    sent += commands(rig.stand())
+    assert len(sent) == 3, 'approach, nominal path, recovery'
+    assert np.allclose(nominal.path[0], rig.result.theta_s)
+    for command, start in zip(sent, [rig.result.theta_s + [0.3, -0.2, 0.4], rig.result.theta_s,
+                                     point_at_fraction(nominal.path, 0.4)], strict=True):
+        assert np.allclose(command.path[0], start, atol=1e-9)
+        certified = np.asarray(rig.result.nominal_path) if command is nominal else None
+        assert limit_violations(command.path, command.velocities, command.accelerations,
+                                command.times, limits, rig.scene.robot.limits, certified) == []
+
+
+def test_the_nominal_command_is_slowed_until_a_lock_on_it_brakes_certified(rig):
+    """Issue 36, item 3: at the full limits the boxes do not certify (speed < 1 below); the
+    command sent does."""
+    limits = rig.executor.commanded_limits()
+    checker = rig.obstacles.checker
+    full = time_within_limits(np.asarray(rig.result.nominal_path), limits)
+    assert braking_speed_scaling(checker, full, limits.acceleration) < 0.9
+    nominal = rig.nominal()
+    sent = TimedPath(nominal.path, nominal.velocities, nominal.accelerations, nominal.times)
+    assert braking_speed_scaling(checker, sent, limits.acceleration) == 1.0
+    assert nominal.times[-1] > full.times[-1]
