@@ -4,8 +4,10 @@ The planner, executor, sim and injector run as the installed executables, each i
 own process, on fig3a; a second planner, in a ROS domain of its own, waits for its robot
 on /robot_description. After a good plan and execution, every input of theirs gets
 malformed messages drawn from a seeded generator (each one malformed: a marker array
-holds at least one bad marker, so none is ever applied), then the plan service gets
-malformed requests, then the Trigger services get calls in a random order. Afterwards:
+holds at least one bad marker, so none is ever applied, and the nodes then hold a set
+that is not the one published until a full set arrives), then the plan service gets
+malformed requests, then the Trigger services get calls in a random order. Afterwards,
+with a full set of obstacles (DELETEALL) published:
 
 - no process died (`deaths`);
 - each process's resident memory (VmRSS) grew by at most 10 % (`rss_before`: after a
@@ -569,6 +571,16 @@ class FuzzRun:
             stamp_key(msg.header.stamp) == self.report.good_plan for msg in latched) and \
             self.report.held_plan == self.report.good_plan
 
+    def _publish_full_obstacle_set(self) -> None:
+        """Publish DELETEALL (the static obstacles only); wait until the nodes applied it."""
+        mark = self.client.status_mark
+        publisher = self.node.create_publisher(MarkerArray, '/ftplan/obstacles', LATCHED_QOS)
+        publisher.publish(MarkerArray(markers=[Marker(action=Marker.DELETEALL)]))
+        for node in ('ftplan_planner', 'ftplan_executor'):
+            self.client.wait_for_status(f'{node}: obstacles',
+                                        lambda v: v.get('complete') == 'True', 30.0, mark)
+        self.node.destroy_publisher(publisher)
+
     def _valid_request_afterwards(self) -> None:
         client = self.client
         deadline = time.monotonic() + 60.0
@@ -578,6 +590,7 @@ class FuzzRun:
                 break
             client.spin_until(lambda: False, 0.5)
         client.trigger('/ftplan_sim/reset')
+        self._publish_full_obstacle_set()
         motion = client.plan(goal=(1.0, 0.0), start=(2.0, 0.0), timeout=120.0)
         if not motion.succeeded or not np.allclose(motion.theta_s, self._theta_s):
             self.report.answer = f'plan: {motion.message}'
