@@ -4,6 +4,16 @@ import numpy as np
 import pytest
 
 
+@pytest.fixture(scope='session', autouse=True)
+def cache_home(tmp_path_factory):
+    """Keep the mesh covers (core/model/cover_cache.py) of a test run out of the user's cache."""
+    with pytest.MonkeyPatch.context() as patch:
+        home = tmp_path_factory.mktemp('cache')
+        patch.setenv('XDG_CACHE_HOME', str(home))
+        patch.delenv('FTPLAN_CACHE_DIR', raising=False)
+        yield home
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import ConvexHull
 
 from ftplan_ros.core.io.scene_file import parse_scene
 from ftplan_ros.core.model.scene import Scene
@@ -108,6 +109,49 @@ CUBE = (np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05)
                   for z in (-0.05, 0.05)]),
         np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
                   [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]))
+
+
+def capsule_hull(length: float = 0.2, radius: float = 0.05, points: int = 152, seed: int = 0,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """A convex mesh (vertices, faces) like a robot link's collision hull, along z [m].
+
+    The hull of `points` random points on a capsule's surface (core from z = 0 to
+    `length`): 2 points - 4 triangles (300 for 152 points), like the Panda's meshes.
+    """
+    rng = np.random.default_rng(seed)
+    directions = rng.normal(size=(points, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    vertices = radius * directions
+    tube = rng.random(points) < 0.6  # on the tube, else on a cap
+    radial = directions[tube, :2] / np.linalg.norm(directions[tube, :2], axis=1)[:, None]
+    vertices[tube, :2] = radius * radial
+    vertices[tube, 2] = rng.uniform(0.0, length, tube.sum())
+    vertices[~tube & (directions[:, 2] > 0), 2] += length
+    hull = ConvexHull(vertices)
+    return vertices[hull.vertices], _reindex(hull.simplices, hull.vertices)
+
+
+def torus(major: float = 0.06, minor: float = 0.02, around: int = 24, across: int = 12,
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """A non-convex mesh (vertices, faces): a torus about z [m], 2 * around * across triangles."""
+    u, v = np.meshgrid(np.arange(around) * 2 * np.pi / around,
+                       np.arange(across) * 2 * np.pi / across, indexing='ij')
+    vertices = np.stack([(major + minor * np.cos(v)) * np.cos(u),
+                         (major + minor * np.cos(v)) * np.sin(u), minor * np.sin(v)],
+                        axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(around), np.arange(across), indexing='ij')
+    a, b = i * across + j, ((i + 1) % around) * across + j
+    c, d = ((i + 1) % around) * across + (j + 1) % across, i * across + (j + 1) % across
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                            np.stack([a, c, d], -1).reshape(-1, 3)])
+    return vertices, faces
+
+
+def _reindex(faces: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """Faces over the points `kept` (their indices into the old points), renumbered."""
+    new = np.full(kept.max() + 1, -1)
+    new[kept] = np.arange(len(kept))
+    return new[faces]
 
 
 def write_binary_stl(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
