@@ -250,6 +250,39 @@ def bot(urdf: Path, task_kind: str = 'position'):
                            mesh_dirs=[str(urdf.parent)], task_kind=task_kind)
 
 
+MESH_ARM_JOINTS = (('z', 0.1), ('y', 0.3), ('y', 0.3), ('y', 0.3))  # axis, offset [m]
+
+
+def mesh_arm(directory: Path, task_kind: str = 'position'):
+    """A 4-joint arm whose links are convex STL hulls like the Panda's (`capsule_hull`).
+
+    Joints turn about z, y, y, y, each 0.3 m beyond the last along the straight arm;
+    each link is a hull 0.05 m thick and 0.35 m long from its joint, so links overlap
+    their neighbours (exempt) and pass close to the links two away: their bounding
+    spheres meet where the hulls are centimetres apart.
+    """
+    from ftplan_ros.core.io.scene_file import robot_from_urdf
+    links, joints = ['  <link name="base"/>'], []
+    for k, (axis, offset) in enumerate(MESH_ARM_JOINTS):
+        write_binary_stl(directory / f'link{k + 1}.stl', *capsule_hull(0.25, 0.05, seed=k))
+        parent = 'base' if k == 0 else f'link{k}'
+        vector = {'z': '0 0 1', 'y': '0 1 0'}[axis]
+        joints.append(f'  <joint name="j{k + 1}" type="revolute"><parent link="{parent}"/>'
+                      f'<child link="link{k + 1}"/><origin xyz="0 0 {offset}"/>'
+                      f'<axis xyz="{vector}"/><limit lower="-2.6" upper="2.6" effort="1" '
+                      'velocity="1"/></joint>')
+        links.append(f'  <link name="link{k + 1}"><collision><origin xyz="0 0 0.05"/><geometry>'
+                     f'<mesh filename="link{k + 1}.stl"/></geometry></collision></link>')
+    joints.append('  <joint name="tip_joint" type="fixed"><parent link="link4"/>'
+                  '<child link="tip"/><origin xyz="0 0 0.35"/></joint>')
+    xml = '<robot name="mesh_arm">\n' + '\n'.join(links + ['  <link name="tip"/>'] + joints) \
+        + '\n</robot>\n'
+    (directory / 'mesh_arm.urdf').write_text(xml)
+    adjacent = [['base', 'link1']] + [[f'link{k}', f'link{k + 1}'] for k in range(1, 4)]
+    return robot_from_urdf(xml, 'tip', disabled_collisions=adjacent,
+                           mesh_dirs=[str(directory)], task_kind=task_kind)
+
+
 def slice_distance(surface, joint, theta):
     """Length [rad] of a shortest path from θ to the goal row in the web's slice at θ_joint.
 

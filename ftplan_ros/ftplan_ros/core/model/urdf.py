@@ -7,11 +7,14 @@ path (fingers, a second arm) are locked at zero with Pinocchio's `buildReducedMo
 which folds their links' geometry into the chain, and fixed joints are folded in the
 same way. Collision geometry is the links' `<collision>` elements: boxes, cylinders,
 spheres, capsules and meshes (loaded by Pinocchio; mesh paths are looked up next to the
-URDF and under `mesh_dirs`).
+URDF and under `mesh_dirs`). Each mesh is covered by convex pieces as it is loaded
+(cover.py; read from the cache after the first time), and its cover is logged with the
+padding it adds.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 
 import numpy as np
@@ -22,6 +25,8 @@ from .chain import ChainModel
 from .geometry import Shape
 from .robot import LinkShape
 from .urdf_structure import UrdfDescription, read_urdf
+
+logger = logging.getLogger(__name__)
 
 _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
@@ -73,8 +78,20 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     locked = [j for j in range(1, model.njoints) if j not in path]
     if locked:
         model, geometry = pin.buildReducedModel(model, geometry, locked, pin.neutral(model))
-    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
-                  where)
+    chain = _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
+                   where)
+    _log_covers(chain.shapes)
+    return chain
+
+
+def _log_covers(shapes: Sequence[LinkShape]) -> None:
+    """Cover every mesh now (cover.py) and log each cover's pieces and padding."""
+    for item in shapes:
+        if item.shape.kind == 'mesh':
+            cover = item.shape.cover
+            logger.info('%s: mesh of %d triangles covered by %d convex piece(s), padding '
+                        '%.2f mm', item.urdf_link, len(item.shape.faces), len(cover.pieces),
+                        1e3 * cover.largest_padding)
 
 
 def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_link: str,
