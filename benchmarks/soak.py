@@ -12,10 +12,12 @@ goal without collision, runs drilled as asked (the lock landed within 0.02 of it
 fraction: `Drill.missed`), the failures and the runs not drilled with their reasons, the
 approaches taken and the recovery time (lock event -> arm at the goal, wall time)
 p50/p95. Exit 1 if any run failed or was not drilled as asked. The default scenes:
-fig3a, crowded_sheets_100 (only the recovery sheets of issue 9 solve it) and four of the
-tests' (test/ros/scenes): two crowded ones (the paper's arm among 12 disks), and two where
+fig3a, crowded_sheets_100 (only the recovery sheets of issue 9 solve it) and six of the
+tests' (test/ros/scenes): two crowded ones (the paper's arm among 12 disks), two where
 the planner's favourite θ_s lies on another arc of M_s than the sim's start (split_arcs:
-a start on the sim's arc is preferred; detour: RRT-Connect goes round the disks).
+a start on the sim's arc is preferred; detour: a start within reach that the joint grid
+offers), and two crowded ones whose θ_s does lie on another arc (another_arc_rrt:
+RRT-Connect goes round the disks; another_arc_cells: through the grid's certified cells).
 """
 
 from __future__ import annotations
@@ -48,7 +50,8 @@ from ftplan_ros.progress import Progress  # noqa: E402
 SCENES = [REPO / 'config' / 'scenes' / f'{name}.yaml'
           for name in ('fig3a', 'crowded_sheets_100')] + [
     REPO / 'test' / 'ros' / 'scenes' / f'{name}.yaml'
-    for name in ('crowded_6', 'crowded_12', 'split_arcs', 'detour')]
+    for name in ('crowded_6', 'crowded_12', 'split_arcs', 'detour', 'another_arc_rrt',
+                 'another_arc_cells')]
 
 
 def soak_scene(path: Path, drills: int, seed: int, speed: float) -> dict:

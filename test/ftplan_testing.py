@@ -15,12 +15,15 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import ConvexHull
 
+from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.io.scene_file import parse_scene
 from ftplan_ros.core.model.scene import Scene
+from ftplan_ros.core.paper.manifolds import trace_self_motion_manifolds
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / 'config' / 'scenes'
 ROBOTS = REPO / 'config' / 'robots'
+TEST_SCENES = REPO / 'test' / 'ros' / 'scenes'  # the tests' own scenes
 
 
 def ftplan(*args, cwd=None) -> subprocess.CompletedProcess:
@@ -43,6 +46,14 @@ def paper_scene(start=(2.0, 0.0), obstacles=(), tolerance=0.01) -> Scene:
         'robot': {'type': 'planar', 'link_lengths': [1.0, 1.0, 1.0]},
         'obstacles': [{'type': 'sphere', 'center': list(c), 'radius': r} for c, r in obstacles],
         'task': {'start': list(start), 'goal': [1.0, 0.0], 'goal_tolerance': tolerance}})
+
+
+def clearest_start(scene: Scene) -> np.ndarray:
+    """The sim's default start (n,) [rad]: the clearest traced point of M_s."""
+    checker = CollisionChecker(scene.robot, scene.obstacles)
+    points = np.vstack([b.points for b in trace_self_motion_manifolds(
+        scene.robot, np.array(scene.task.start), np.random.default_rng(0))])
+    return points[int(np.argmax(checker.min_clearance(points)))]
 
 
 def jacobian(robot, theta):

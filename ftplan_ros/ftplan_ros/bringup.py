@@ -2,6 +2,7 @@
 
     ftplan-bringup --scene config/scenes/fig3a.yaml --drill joint2@0.4
     ftplan-bringup --scene config/scenes/fig3a.yaml --trials 20 --seed 1 --png out/motion.png
+    ftplan-bringup --scene config/scenes/fig3a.yaml --drill joint2@0.4 --record out/run.mcap
 
 The planner, executor, sim and injector nodes run on one MultiThreadedExecutor in a
 background thread (no launch system needed); a small director, a PlanClient, plans the
@@ -14,12 +15,14 @@ axis and pose tasks, orientation [rad], minimum clearance; how many runs were dr
 asked) and exits 0 only when every run reached the goal without a collision and every
 drill was drilled as asked (its lock landed on the nominal path within 0.02 of its
 fraction: `Drill.missed`), 1 otherwise, 2 on bad input and 130 on Ctrl-C (after shutting
-every node down).
+every node down). `--record FILE.mcap` writes every topic of the run to a rosbag2-compatible
+MCAP file (nodes/recorder.py), closed on Ctrl-C too; `ftplan replay` reads it back.
 """
 
 from __future__ import annotations
 
 import argparse
+import shlex
 import signal
 import sys
 import threading
@@ -42,6 +45,7 @@ from .core.model.task_space import describe_point
 from .nodes.executor import ExecutorNode
 from .nodes.injector import InjectorNode, parse_drill
 from .nodes.planner import PlannerNode
+from .nodes.recorder import Recording
 from .nodes.reporting import parse_number, parse_vector
 from .nodes.sim import SimNode
 from .nodes.spinning import BackgroundSpin, RclError
@@ -54,6 +58,7 @@ from .nodes.topics import (
 )
 from .plan_client import Outcome, PlanClient, PlannedMotion
 from .progress import Progress
+from .recording.bag_writer import BagWriter
 
 SIM_STATUS = f'{SIM_NODE}: arm'
 INJECTOR_STATUS = f'{INJECTOR_NODE}: drills'
@@ -163,14 +168,15 @@ class Director:
         mark = client.status_mark
         try:
             report = client.execute(self.motion, timeout=timeout)
+            # The executor may finish before the sim has stopped: record until it has.
+            arm = client.wait_for_status(
+                SIM_STATUS, lambda v: v.get('resets') == resets and v.get('state') == 'stopped'
+                and v.get('goal_reached') == 'True', 2.0 if report.result is Outcome.SUCCEEDED
+                else 0.0, mark) or client.status(SIM_STATUS)
         finally:
             client.spin_until(lambda: False, 0.05)  # the last joint states of the run
             self._record = False
         values = report.values
-        arm = client.wait_for_status(
-            SIM_STATUS, lambda v: v.get('resets') == resets and v.get('state') == 'stopped'
-            and v.get('goal_reached') == 'True', 2.0 if report.result is Outcome.SUCCEEDED
-            else 0.0, mark) or client.status(SIM_STATUS)
         drill = ''
         for reading in client.statuses(INJECTOR_STATUS, mark):
             if reading.values.get('execution') == str(report.execution):
@@ -286,6 +292,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--png', type=Path,
                         help='draw the executed motion of a drilled run (the one locked '
                         'nearest mid-path) here')
+    parser.add_argument('--record', type=Path, metavar='FILE.mcap',
+                        help='record every topic of the run here (MCAP, as rosbag2 writes it)')
     parser.add_argument('--speed', type=float, default=2.0,
                         help='fastest commanded joint speed [rad/s] (2.0)')
     parser.add_argument('--rate', type=float, default=100.0,
@@ -318,7 +326,24 @@ def _check(args: argparse.Namespace) -> Scene:
                              f'{args.png}')
         if not args.png.resolve().parent.is_dir():
             raise InputError('--png', f'the folder of {args.png} does not exist')
+    if args.record is not None:
+        if args.record.suffix != '.mcap':
+            raise InputError('--record', f'writes MCAP files: give a path ending in .mcap, '
+                             f'not {args.record}')
+        if not args.record.resolve().parent.is_dir():
+            raise InputError('--record', f'the folder of {args.record} does not exist')
     return scene
+
+
+def _open_recording(args: argparse.Namespace, scene: Scene,
+                    argv: list[str] | None) -> BagWriter:
+    """Create the --record file, naming the run's scene file and command in it."""
+    command = shlex.join(['ftplan-bringup', *map(str, sys.argv[1:] if argv is None else argv)])
+    try:
+        return BagWriter(args.record, {'scene_file': str(args.scene.resolve()),
+                                       'scene': scene.name, 'command': command})
+    except OSError as error:
+        raise InputError('--record', f'cannot write {args.record} ({error.strerror})') from None
 
 
 def _plan_and_run(director: Director, args: argparse.Namespace, scene: Scene,
@@ -355,6 +380,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         scene = _check(args)
+        writer = _open_recording(args, scene, argv) if args.record is not None else None
     except InputError as error:
         print(f'ftplan-bringup: error: {error}', file=sys.stderr)
         return 2
@@ -364,6 +390,8 @@ def main(argv: list[str] | None = None) -> int:
                    signal_handler_options=SignalHandlerOptions.NO)
     except RclError as error:
         print(f'ftplan-bringup: error: cannot start ROS: {error}', file=sys.stderr)
+        if writer is not None:
+            writer.close()
         return 2
     # Ctrl-C and SIGTERM only set `interrupted`: the client raises KeyboardInterrupt from
     # its next wait. Raised by the signal itself, it could land inside rclpy's executor,
@@ -371,12 +399,16 @@ def main(argv: list[str] | None = None) -> int:
     interrupted = threading.Event()
     previous = {number: signal.signal(number, lambda signum, frame: interrupted.set())
                 for number in (signal.SIGINT, signal.SIGTERM)}
-    suite = client = None
+    suite = client = recording = None
     try:
+        if writer is not None:
+            recording = Recording(writer)
         progress.line('starting the planner, executor, sim and injector nodes')
         suite = Suite(args.scene.resolve(), speed=args.speed, rate=args.rate,
                       drills=args.drill, random_drills=args.trials, seed=args.seed,
                       log_level=None if args.verbose else LoggingSeverity.WARN)
+        if recording is not None:
+            recording.node.subscribe_to_graph()  # the suite's topics, before any plan
         client = PlanClient(interrupted=interrupted)
         return _plan_and_run(Director(client, scene, progress), args, scene, progress)
     except KeyboardInterrupt:
@@ -388,6 +420,12 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
+        if recording is not None:
+            counts = recording.stop()
+            print(f'wrote {args.record}: {sum(counts.values())} messages on {len(counts)} '
+                  'topics')
+        elif writer is not None:
+            writer.close()
         if client is not None:
             client.destroy_node()
         if suite is not None:

@@ -7,9 +7,11 @@
                  [--crowded-cells C] [--grid-baseline N]
                  [--json OUT.json]
     ftplan study SPEC.yaml --out DIR [--scheduler ADDRESS] [--workers N]
+    ftplan replay RECORDING.mcap [--png MOTION.png] [--scene SCENE.yaml]
 
 Exit codes: 0 done (for `plan`: a failure-tolerant plan exists), 1 no failure-tolerant
-plan (or a drill trial failed), 2 bad input (one line on stderr naming the field).
+plan (or a drill trial failed, or a recording without a run to draw), 2 bad input (one
+line on stderr naming the field; a file that is not a complete recording too).
 """
 
 from __future__ import annotations
@@ -79,6 +81,14 @@ def _parser() -> argparse.ArgumentParser:
     _planner_arguments(figure)
     figure.set_defaults(run=_figure_command)
 
+    _add_bench_command(commands)
+    _add_study_command(commands)
+    _add_replay_command(commands)
+    return parser
+
+
+def _add_bench_command(commands) -> None:
+    """Add `ftplan bench`: the planner timed against a baseline in one run."""
     bench = commands.add_parser('bench', help='time the planner against a baseline in one run')
     bench.add_argument('--robot', default='planar3r', choices=('planar3r', 'panda', 'iiwa14'),
                        help='planar3r (the paper\'s arm, recall against a reference grid) or a '
@@ -99,6 +109,9 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument('--json', type=Path, help='write every measurement here')
     bench.set_defaults(run=_bench_command)
 
+
+def _add_study_command(commands) -> None:
+    """Add `ftplan study`: a map or sweep of many tasks on Dask."""
     study = commands.add_parser('study', help='plan a map or a sweep of many tasks on Dask')
     study.add_argument('spec', type=Path, help='study spec YAML (scene, vary, planner, chunk)')
     study.add_argument('--out', type=Path, required=True,
@@ -108,7 +121,18 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument('--workers', type=int,
                        help='worker processes of the local cluster (default: one per CPU)')
     study.set_defaults(run=_study_command)
-    return parser
+
+
+def _add_replay_command(commands) -> None:
+    """Add `ftplan replay`: the summary and figure of a bringup recording."""
+    replay = commands.add_parser('replay', help='summarise a recording of ftplan-bringup '
+                                 '(as ros2 bag info does) and draw its run')
+    replay.add_argument('recording', type=Path, help='an MCAP file of ftplan-bringup --record')
+    replay.add_argument('--png', type=Path, help='draw the recorded run here, as the '
+                        'bringup\'s --png draws it live')
+    replay.add_argument('--scene', type=Path, help='the scene of the run (default: the scene '
+                        'file the recording names)')
+    replay.set_defaults(run=_replay_command)
 
 
 def _planner_arguments(parser: argparse.ArgumentParser) -> None:
@@ -238,6 +262,27 @@ def _bench_command(args: argparse.Namespace) -> int:
 def _study_command(args: argparse.Namespace) -> int:
     from .study.command import run_study_command  # Dask loads for studies only
     return run_study_command(args.spec, args.out, args.scheduler, args.workers, Progress())
+
+
+def _replay_command(args: argparse.Namespace) -> int:
+    if args.png is not None and args.png.suffix.lower() != '.png':
+        raise InputError('--png', f'figures are PNG files: give a path ending in .png, not '
+                         f'{args.png}')
+    from .recording.bag_reader import open_bag  # ROS message readers load for replays only
+    from .recording.replay import describe_run, draw_recorded_run, recorded_runs, recorded_scene
+    with open_bag(args.recording) as bag:
+        print(bag.info())
+        if args.png is None:
+            return 0
+        scene = recorded_scene(bag, args.scene)
+        runs = recorded_runs(bag, list(scene.robot.joint_names))
+    print('\n'.join(describe_run(run) for run in runs) or 'no recorded run')
+    drawn = draw_recorded_run(scene, runs, args.png)
+    if drawn is None:
+        print(f'ftplan: no recorded run to draw in {args.png}', file=sys.stderr)
+        return 1
+    print(f'wrote {args.png} (run {drawn.run})')
+    return 0
 
 
 def _describe(scene, result) -> str:

@@ -14,8 +14,9 @@ In the spirit of nav2_simple_commander's BasicNavigator: a Node that owns its sp
     client.destroy_node()
 
 `plan` returns θ_s, the nominal trajectory and the failure surface as one PlannedMotion
-(gathered from the service response and the planner's latched topics); when there is
-no plan its message carries the planner's reason from /diagnostics. `execute` calls
+(gathered from the service response and the planner's latched topics, as the executor
+gathers them: nodes/plan_assembly.py); when there is no plan its message carries the
+planner's reason from /diagnostics. `execute` calls
 /ftplan/execute and follows the executor's status until the arm is at the goal or the
 execution failed. Never use a PlanClient from inside another node's callback: its verbs
 block while they spin.
@@ -31,7 +32,6 @@ from __future__ import annotations
 
 import threading
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -48,17 +48,9 @@ from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from ftplan_msgs_py import (
-    DiagnosticReading,
-    create_pose,
-    read_diagnostic_status,
-    read_failure_surface,
-    read_joint_state,
-    read_joint_trajectory,
-    read_path_poses,
-)
+from ftplan_msgs_py import DiagnosticReading, create_pose, read_diagnostic_status, read_path_poses
 
-from .nodes.plan_info import read_plan_info
+from .nodes.plan_assembly import LatchedPlan, PlanTopics
 from .nodes.qos import LATCHED_QOS
 from .nodes.reporting import parse_number, stamp_key
 from .nodes.tasks import pose_of_task_point
@@ -67,6 +59,7 @@ from .nodes.topics import (
     EXECUTE_SERVICE,
     EXECUTOR_NODE,
     FAILURE_SURFACE,
+    PLAN_INFO,
     PLAN_SERVICE,
     PLANNER_NODE,
     START_CONFIGURATION,
@@ -159,18 +152,17 @@ class PlanClient(Node):
         self._statuses: dict[str, DiagnosticReading] = {}
         self._status_log: list[tuple[int, DiagnosticReading]] = []
         self._status_seq = 0
-        # The latched results of recent plans, newest last.
-        self._starts: deque[JointState] = deque(maxlen=_PLAN_HISTORY)
-        self._trajectories: deque[JointTrajectory] = deque(maxlen=_PLAN_HISTORY)
-        self._surfaces: deque[Float64MultiArray] = deque(maxlen=_PLAN_HISTORY)
+        self._plans = PlanTopics(kept=_PLAN_HISTORY)  # the latched results of recent plans
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, self._diagnostics_callback, 50)
         results_qos = QoSProfile(depth=_PLAN_HISTORY, durability=LATCHED_QOS.durability,
                                  reliability=LATCHED_QOS.reliability)
-        for msg_type, topic, kept in ((JointState, START_CONFIGURATION, self._starts),
-                                      (JointTrajectory, TRAJECTORY, self._trajectories),
-                                      (Float64MultiArray, FAILURE_SURFACE, self._surfaces)):
+        for msg_type, topic, kept in ((JointState, START_CONFIGURATION, self._plans.starts),
+                                      (JointTrajectory, TRAJECTORY, self._plans.trajectories),
+                                      (Float64MultiArray, FAILURE_SURFACE, self._plans.surfaces)):
             self.create_subscription(msg_type, topic, lambda msg, kept=kept: kept.append(msg),
                                      results_qos)
+        # The statuses that describe no plan are left aside: the client waits for its own.
+        self.create_subscription(DiagnosticArray, PLAN_INFO, self._plans.add_info, results_qos)
         self._executor = SingleThreadedExecutor(context=self.context)
         self._executor.add_node(self)
 
@@ -305,7 +297,6 @@ class PlanClient(Node):
         status = self._plan_status(key, mark, min(_STATUS_WAIT,
                                                   max(0.0, deadline - time.monotonic())))
         plan_time = _plan_time(status)
-        info = read_plan_info(status.values) if status else None
         if gathered is None:
             return PlannedMotion(Outcome.TIMED_OUT, f'plan {key} answered, but its latched '
                                  'topics did not all arrive', key, round_trip_s=round_trip,
@@ -313,17 +304,16 @@ class PlanClient(Node):
         if isinstance(gathered, str):
             return PlannedMotion(Outcome.FAILED, f'plan {key}: {gathered}', key,
                                  round_trip_s=round_trip, plan_time_s=plan_time)
-        names, theta_s, trajectory, times, surface, index = gathered
         try:
             path, orientations = read_path_poses(response.plan)
         except ValueError as error:
             return PlannedMotion(Outcome.FAILED, f'plan {key}: unreadable Path: {error}', key,
                                  round_trip_s=round_trip, plan_time_s=plan_time)
         return PlannedMotion(Outcome.SUCCEEDED, status.message if status else 'plan found',
-                             key, names, path, orientations, theta_s, trajectory, times,
-                             surface, index, round_trip, plan_time,
-                             info.task_kind if info else '',
-                             info.tolerated_joints if info else (),
+                             key, gathered.joint_names, path, orientations, gathered.theta_s,
+                             gathered.trajectory, gathered.times, gathered.paths,
+                             gathered.nominal, round_trip, plan_time, gathered.info.task_kind,
+                             gathered.info.tolerated_joints,
                              status.values.get('approach', '') if status else '')
 
     def _plan_status(self, key: str, mark: int, timeout: float) -> DiagnosticReading | None:
@@ -331,41 +321,24 @@ class PlanClient(Node):
         return self.wait_for_status(self._planner_status, lambda v: v.get('stamp') == key,
                                     timeout, mark)
 
-    def _gather_plan(self, key: str, timeout: float):
-        """θ_s, trajectory and S_F of plan `key` from the latched topics, once all are in.
+    def _gather_plan(self, key: str, timeout: float) -> LatchedPlan | str | None:
+        """θ_s, trajectory, S_F and plan status of plan `key` from the latched topics.
 
         Returns None on timeout, and the reason as a string when they cannot be read (S_F
         carries no stamp: an unreadable one may be another publisher's, so the plan's own is
         waited for until the timeout).
         """
-        found = []
-        problems = []
+        found: list[LatchedPlan] = []
+        problems: list[str] = []
 
         def complete() -> bool:
-            start = _stamped(self._starts, key)
-            trajectory = _stamped(self._trajectories, key)
-            if start is None or trajectory is None:
-                return False
-            names = tuple(trajectory.joint_names)
             try:
-                positions, times = read_joint_trajectory(trajectory, names)
-                theta_s = read_joint_state(start, names)
+                plan = self._plans.assemble(key)
             except ValueError as error:
                 problems[:] = [f'unreadable plan topics: {error}']
                 return False
-            for surface in reversed(self._surfaces):  # the newest S_F holding the path
-                try:
-                    paths = read_failure_surface(surface)
-                except ValueError as error:
-                    problems[:] = [f'unreadable plan topics: {error}']
-                    continue
-                if paths.shape[1:] != positions.shape:
-                    continue
-                matches = np.flatnonzero(np.all(paths == positions[None], axis=(1, 2)))
-                if len(matches):
-                    found.append((names, theta_s, positions, times, paths, int(matches[0])))
-                    return True
-            return False
+            found.extend([plan] if plan is not None else [])
+            return plan is not None
 
         if self.spin_until(complete, timeout):
             return found[0]
@@ -455,12 +428,6 @@ def _left(service: str, server: str) -> str:
     """Say that `service` lost its server (the `server`, e.g. 'planner') before answering."""
     return (f'{service} left the ROS graph before answering: the {server} is gone (stopped, '
             'or its process died)')
-
-
-def _stamped(messages: deque, key: str):
-    """Return the newest message of `messages` stamped `key` ('sec.nanosec'), else None."""
-    return next((msg for msg in reversed(messages) if stamp_key(msg.header.stamp) == key),
-                None)
 
 
 def _plan_time(status: DiagnosticReading | None) -> float:

@@ -10,6 +10,7 @@ from spatial_scenes import panda_scene
 from ftplan_ros.bringup import RunReport, summarize
 from ftplan_ros.core import load_scene
 from ftplan_ros.plan_client import Outcome, PlannedMotion
+from ftplan_ros.recording.bag_reader import open_bag
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
@@ -82,14 +83,19 @@ def test_bad_input_exits_2_with_one_line(processes):
     assert code == 2 and 'cannot read nonexistent.yaml (no such file)' in err
 
 
-def test_ctrl_c_shuts_every_node_down_cleanly(processes):
-    bringup = processes(BRINGUP + ['--scene', FIG3A, '--trials', '200', '--seed', '3'])
+def test_ctrl_c_shuts_every_node_down_cleanly_and_closes_the_recording(processes, tmp_path):
+    recording = tmp_path / 'run.mcap'
+    bringup = processes(BRINGUP + ['--scene', FIG3A, '--trials', '200', '--seed', '3',
+                                   '--record', recording])
     wait_for(lambda: 'run 1/200' in bringup.output()[1] or not bringup.alive(), timeout=300,
              what='the first run')
     code, out, err = bringup.interrupt()
     assert code == 130, out + err
     assert 'interrupted; shutting the nodes down' in err
     assert 'Traceback' not in err and 'exception' not in err.lower()
+    with open_bag(recording) as bag:  # complete, with its summary
+        assert bag.topic('/joint_states').count > 0
+        assert f'Messages:          {bag.message_count}' in bag.info()
 
 
 def test_a_drill_of_a_7_joint_arm_through_the_bringup(processes, tmp_path):
@@ -105,8 +111,9 @@ def test_a_drill_of_a_7_joint_arm_through_the_bringup(processes, tmp_path):
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'
 
 
-def test_a_bad_png_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_path):
-    """Issue 10, row 11: both ran the whole suite first, then a traceback and exit 1."""
+def test_a_bad_png_or_record_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_path):
+    """Issue 10, row 11: both ran the whole suite first, then a traceback and exit 1.
+    Issue 37: a --record path is checked as --png is, and no file is left behind."""
     two = tmp_path / 'two_links.yaml'
     two.write_text('robot: {type: planar, link_lengths: [1.0, 1.0]}\n'
                    'task: {start: [1.5, 0.0], goal: [1.0, 0.5]}\n')
@@ -114,23 +121,29 @@ def test_a_bad_png_or_an_unplannable_scene_exit_2_before_any_run(processes, tmp_
                            '--png: writes PNG files: give a path ending in .png'),
                           (['--scene', FIG3A, '--png', tmp_path / 'none' / 'x.png'],
                            'does not exist'),
+                          (['--scene', FIG3A, '--record', tmp_path / 'run.bag'],
+                           '--record: writes MCAP files: give a path ending in .mcap'),
+                          (['--scene', FIG3A, '--record', tmp_path / 'none' / 'run.mcap'],
+                           '--record: the folder of'),
                           (['--scene', two], '2 joints give no redundancy')]:
         code, out, err = processes(BRINGUP + args).wait(timeout=120)
         assert code == 2, (args, out, err)
         assert problem in err and 'Traceback' not in err
         assert 'starting the planner' not in err                 # refused before any node
+    assert not (tmp_path / 'run.bag').exists()
 
 
 def test_where_no_plan_starts_within_the_arms_reach_the_bringup_says_so(processes):
-    """out_of_reach: the sim's default start lies in another free component than every
-    start that may be failure-tolerant. The run fails before moving, and the plan's line
-    says that a grid proved no plan can start within the arm's reach."""
+    """out_of_reach (issue 36): the sim's default start lies in another free component than
+    every start that may be failure-tolerant. The planner found a plan there and served it,
+    its approach proved impossible; now it answers that none is reachable, proved, and the
+    bringup exits 1 before any run."""
     scene = Path(__file__).parent / 'scenes' / 'out_of_reach.yaml'
     code, out, err = processes(BRINGUP + ['--scene', scene]).wait(timeout=300)
     assert code == 1, out + err
-    assert 'approach: no failure-tolerant plan starts where the arm can get to from here ' \
-        '(proved on a 64^3 joint grid' in err
-    assert '0/1 runs reached the goal without collision' in out
+    assert 'scene out_of_reach: none reachable (proved): no failure-tolerant plan starts where ' \
+        'the arm can get to from here (proved on a 64^3 joint grid' in out
+    assert 'runs reached' not in out
 
 
 def test_drills_from_the_sims_default_start_work_when_theta_s_is_on_another_arc(processes):

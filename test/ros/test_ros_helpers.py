@@ -19,7 +19,12 @@ from ftplan_ros.core.model.angles import wrap_angle
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.core.planning.approach import straight_move_ends
 from ftplan_ros.core.validation import LARGEST_NUMBER
-from ftplan_ros.nodes.motion import fraction_at_time, progress_along, time_at_fraction, time_path
+from ftplan_ros.execution.motion import (
+    fraction_at_time,
+    progress_along,
+    time_at_fraction,
+    time_path,
+)
 from ftplan_ros.nodes.obstacles import (
     ObstacleSet,
     obstacle_from_shape,
@@ -27,8 +32,8 @@ from ftplan_ros.nodes.obstacles import (
     rpy_from_quaternion,
     shape_from_obstacle,
 )
-from ftplan_ros.nodes.planner import display_web
-from ftplan_ros.nodes.sim import Motion, default_initial_configuration, task_scene
+from ftplan_ros.nodes.plan_markers import display_web
+from ftplan_ros.nodes.sim import task_scene
 from ftplan_ros.nodes.tasks import (
     bind_task_kind,
     convert_task_point,
@@ -37,6 +42,8 @@ from ftplan_ros.nodes.tasks import (
     pose_of_task_point,
     task_point,
 )
+from ftplan_ros.simulation.initial import default_initial_configuration
+from ftplan_ros.simulation.kinematic import Motion
 
 
 def test_time_path_keeps_the_speed_limit_and_strictly_increasing_times():

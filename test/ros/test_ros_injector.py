@@ -10,6 +10,7 @@ from spatial_scenes import JOINTS, TOLERATED, panda_scene
 from std_srvs.srv import Trigger
 
 from ftplan_msgs_py import create_diagnostic_array, create_diagnostic_status, read_locked_joint
+from ftplan_ros.execution.motion import time_path
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.injector import (
     DRILL_TOLERANCE,
@@ -19,7 +20,6 @@ from ftplan_ros.nodes.injector import (
     parse_drill,
     random_drill,
 )
-from ftplan_ros.nodes.motion import time_path
 from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.sim import SimNode
 from ftplan_ros.plan_client import Outcome, PlanClient

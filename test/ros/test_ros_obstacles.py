@@ -11,7 +11,7 @@ from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from nav_msgs.srv import GetPlan
 from rclpy.parameter import Parameter
 from ros_support import FIG3A as FIG3A_FILE
-from ros_support import wait_for
+from ros_support import WAIT, wait_for
 from spatial_scenes import PANDA_URDF, X_G, X_S, description_parameters, panda_scene
 from std_msgs.msg import Header, String
 from std_srvs.srv import Trigger
@@ -67,9 +67,14 @@ def obstacle_set(*markers: Marker) -> str:
 
 
 def applied(ros, node: str, update: int):
-    """The node's obstacles status once it has applied update `update` (DDS's numbering)."""
+    """The node's obstacles status once it has applied update `update` (DDS's numbering).
+
+    The wait grows with the updates a node has to work through: it only bounds a hang (a
+    thousand after a gap missed 30 s once under a load of 6 on 2 cores).
+    """
     return wait_for(lambda: [s for s in ros.probe.statuses(f'{node}: obstacles')
                              if s.values.get('update') == str(update)],
+                    timeout=max(WAIT, 0.1 * update),
                     what=f'{node} to apply obstacle update {update}')[-1]
 
 

@@ -41,11 +41,12 @@ from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.reporting import stamp_key
 from ftplan_ros.nodes.sim import SimNode
-from ftplan_ros.plan_client import PlanClient
+from ftplan_ros.plan_client import Outcome, PlanClient
 
 PLAN_STATUS = 'ftplan_planner: plan'
 NAMES = ['joint1', 'joint2', 'joint3']
-_PLANS_FOR_A_TURN = 6  # the detour test's plans at most (each ends at θ_s with p ~ 1/15)
+# [rad] on detour, where the planner's straight approach ends whole turns from θ_s
+TURNS_AWAY = [0.67, 1.442, 0.2741]
 FIG3A = load_scene(FIG3A_FILE)
 
 
@@ -286,6 +287,7 @@ def test_the_plan_says_how_the_arm_gets_to_theta_s_and_the_executor_goes_that_wa
                                if s.values.get('stamp') == motion.stamp],
                       what='the plan status')[0]  # /diagnostics may come after the answer
     assert status.values['approach'].startswith('along M_s^F (')
+    assert status.values['reach'] == 'plan with a certified approach'
     approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
                                  if stamp_key(m.header.stamp) == motion.stamp])[0]
     path = read_joint_trajectory(approach, NAMES).positions
@@ -295,27 +297,31 @@ def test_the_plan_says_how_the_arm_gets_to_theta_s_and_the_executor_goes_that_wa
     assert done.values['approach'].startswith('by the path given (')
 
 
-def test_an_arm_no_joint_move_frees_is_told_so_at_once_by_planner_and_executor(ros):
+def test_an_arm_no_joint_move_frees_gets_no_plan_and_the_executor_says_why_at_once(ros):
     """From (1, 0, 0) among fig3a's disks no collision-free joint move reaches θ_s (the
-    joint grid proves it). Planner and executor each searched with RRT-Connect (3 x 1 s)
-    before they said "no collision-free joint move found"."""
+    joint grid proves it). The planner served the plan anyway, its approach "no path"
+    (issue 36); now it answers with an empty Path: no plan found that starts where the arm
+    can get to, and how far it looked. The executor, holding a plan made while the arm
+    stood elsewhere, says at once that no approach exists (it searched with RRT-Connect,
+    3 x 1 s, before)."""
     pocket = [1.0, 0.0, 0.0]
     ros.make(PlannerNode)
     ros.make(ExecutorNode)
-    ros.make(SimNode, max_joint_speed=4.0, initial_configuration=pocket)
-    ros.probe.listen(JointTrajectory, '/ftplan/plan/approach', LATCHED_QOS)
+    sim = ros.make(SimNode, max_joint_speed=4.0)
     ros.probe.listen(JointState, '/joint_states')
     wait_for(lambda: ros.probe.received('/joint_states'))
-    assert np.allclose(read_joint_state(ros.probe.received('/joint_states')[-1], NAMES), pocket)
-    motion = plan(ros)
-    status = wait_for(lambda: [s for s in ros.probe.statuses(PLAN_STATUS)
-                               if s.values.get('stamp') == motion.stamp],
-                      what='the plan status')[0]
+    plan(ros)  # from the sim's default start
+    assert sim.set_parameters([Parameter('initial_configuration', value=pocket)])[0].successful
+    assert ros.probe.call(Trigger, '/ftplan_sim/reset', Trigger.Request()).success
+    wait_for(lambda: np.allclose(read_joint_state(ros.probe.received('/joint_states')[-1],
+                                                  NAMES), pocket), what='the arm in the pocket')
+    motion, status = _answer_of_a_plan(ros, start=(2.0, 0.0), goal=(1.0, 0.0))
     proved = 'no collision-free joint move exists (proved on a 64^3 joint grid'
-    assert status.values['approach'].startswith(proved)
-    approach = wait_for(lambda: [m for m in ros.probe.received('/ftplan/plan/approach')
-                                 if stamp_key(m.header.stamp) == motion.stamp])[0]
-    assert len(approach.points) == 0
+    assert motion.result is Outcome.FAILED and motion.message.startswith(
+        'none found within the search: no failure-tolerant plan found that starts where the '
+        'arm can get to; one starts at theta_s = [')
+    assert proved in motion.message and status.values['reach'] == 'none found within the search'
+    assert 'RRT-Connect to its theta_s (3 x 1 s)' in status.values['reach_search']
     failed = state_of(ros, execute(ros), 'failed')
     assert failed.values['reason'].startswith('no collision-free approach to theta_s from '
                                               f'where the arm stands: {proved}')
@@ -330,54 +336,56 @@ def _approach_end(ros, stamp) -> np.ndarray:
 
 
 def test_the_executor_takes_the_planners_approach_that_ends_whole_turns_from_theta_s(ros):
-    """On detour the planner's RRT-Connect approach ends at θ_s with joint2 a turn up. The
-    executor took only an exact end, so it planned an approach of its own in every
-    execution (up to 3 s, while its watchdog counted the joint states waiting behind)."""
+    """On detour from TURNS_AWAY the planner's straight approach ends at θ_s with joint1 a
+    turn down, joint2 and joint3 a turn up. The executor took only an exact end, so it
+    planned an approach of its own in every execution (up to 3 s, while its watchdog
+    counted the joint states waiting behind)."""
     scene = Path(__file__).parent / 'scenes' / 'detour.yaml'
     ros.make(PlannerNode, scene)
     ros.make(ExecutorNode, scene)
-    ros.make(SimNode, scene, max_joint_speed=8.0)
+    ros.make(SimNode, scene, max_joint_speed=8.0, initial_configuration=TURNS_AWAY)
     ros.probe.listen(JointTrajectory, '/ftplan/plan/approach', LATCHED_QOS)
     ros.probe.listen(JointState, '/joint_states')
     wait_for(lambda: ros.probe.received('/joint_states'))
-    # RRT-Connect is random: about 1 plan in 15 ends at θ_s itself (2 of 30 in a run of
-    # the core's plan_from), which tests nothing here. Plan again until one ends turns away.
-    for _ in range(_PLANS_FOR_A_TURN):
-        motion = plan(ros)  # detour's task is fig3a's: [2, 0] -> [1, 0]
-        turns = (_approach_end(ros, motion.stamp) - motion.theta_s) / (2 * np.pi)
-        if np.any(np.round(turns)):
-            break
+    motion = plan(ros)  # detour's task is fig3a's: [2, 0] -> [1, 0]
+    turns = (_approach_end(ros, motion.stamp) - motion.theta_s) / (2 * np.pi)
     assert np.allclose(turns, np.round(turns), atol=1e-9) and np.any(np.round(turns))
     done = state_of(ros, execute(ros), 'done')
     assert done.values['approach'].startswith('by the path given (')
 
 
-def test_a_finer_proof_grid_set_on_the_planner_proves_a_narrow_gap(ros):
-    """out_of_reach_narrow: from the sim's default start no approach is found. With
-    `approach_proof_cells` 384 the plan's status says that a grid proved no plan starts
-    within the arm's reach; with the default (128) it cannot tell. Other sizes are refused."""
+def test_a_finer_grid_set_on_the_planner_proves_that_no_plan_starts_within_reach(ros):
+    """out_of_reach_narrow: from the sim's default start no plan starts within the arm's
+    reach. With `approach_proof_cells` 384 the planner proves it ("none reachable
+    (proved)"); with the default (128) it finds none within its search and says how far it
+    looked. Both answer with an empty Path. Other sizes are refused."""
     narrow = Path(__file__).parent / 'scenes' / 'out_of_reach_narrow.yaml'
     planner = ros.make(PlannerNode, narrow, approach_time=0.2, approach_proof_cells=384)
     ros.make(SimNode, narrow)
     ros.probe.listen(JointState, '/joint_states')
     wait_for(lambda: ros.probe.received('/joint_states'))
-    assert _approach_of_a_plan(ros).startswith(
-        'no failure-tolerant plan starts where the arm can get to from here (proved on a '
-        '384^3 joint grid')
+    motion, status = _answer_of_a_plan(ros)
+    assert motion.result is Outcome.FAILED and status.values['reach'] == 'none reachable (proved)'
+    assert motion.message.startswith(
+        'none reachable (proved): no failure-tolerant plan starts where the arm can get to '
+        'from here (proved on a 384^3 joint grid')
     assert planner.set_parameters([Parameter('approach_proof_cells', value=128)])[0].successful
-    assert _approach_of_a_plan(ros).startswith('no collision-free joint move found')
+    motion, status = _answer_of_a_plan(ros)
+    assert motion.result is Outcome.FAILED
+    assert status.values['reach'] == 'none found within the search'
+    assert 'a 128^3 joint grid: not proved' in status.values['reach_search']
     refused = planner.set_parameters([Parameter('approach_proof_cells', value=200)])[0]
     assert not refused.successful and 'must be one of 64, 128, 256, 384' in refused.reason
 
 
-def _approach_of_a_plan(ros) -> str:
-    """Plan the scene's task from where the arm stands; return what the status says of
-    the approach."""
+def _answer_of_a_plan(ros, **task):
+    """Plan the task (default: from where the tool is to the scene's goal) for the arm where
+    it stands; return the answer and its status."""
     client = PlanClient(context=ros.context)
     try:
-        motion = client.plan(timeout=60.0)
+        motion = client.plan(timeout=60.0, **task)
     finally:
         client.destroy_node()
-    return wait_for(lambda: [s for s in ros.probe.statuses(PLAN_STATUS)
-                             if s.values.get('stamp') == motion.stamp],
-                    what='the plan status')[0].values['approach']
+    return motion, wait_for(lambda: [s for s in ros.probe.statuses(PLAN_STATUS)
+                                     if s.values.get('stamp') == motion.stamp],
+                            what='the plan status')[0]

@@ -22,7 +22,8 @@ from ftplan_msgs_py import (
 from ftplan_ros.core import load_scene, plan
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.injector import InjectorNode
-from ftplan_ros.nodes.planner import PlannerNode, plan_markers
+from ftplan_ros.nodes.plan_markers import plan_markers
+from ftplan_ros.nodes.planner import PlannerNode
 from ftplan_ros.nodes.qos import LATCHED_QOS
 from ftplan_ros.nodes.reporting import parse_vector
 from ftplan_ros.nodes.sim import SimNode

@@ -191,3 +191,18 @@ def test_progress_prints_rate_and_eta_at_most_once_a_second():
     assert len(lines) == 2
     assert lines[0].endswith('300/1200 tasks, 10.0 tasks/s, ETA 90 s')
     assert lines[1].endswith('1200/1200 tasks, 11.1 tasks/s')
+
+
+def test_replay_of_a_file_that_is_no_complete_recording_is_one_line_and_exit_2(tmp_path):
+    """Issue 37: a file that is not MCAP, or one cut off, is refused naming the file.
+    (Run outside the repository, whose package folders would hide ftplan_msgs_py.)"""
+    text = tmp_path / 'notes.mcap'
+    text.write_text('not a recording\n')
+    run = ftplan('replay', text, '--png', tmp_path / 'x.png', cwd=tmp_path)
+    one_line_error(run, 'notes.mcap: is not an MCAP file')
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(b'\x89MCAP0\r\n' + bytes(100))
+    one_line_error(ftplan('replay', cut, cwd=tmp_path),
+                   'cut.mcap: is not a complete MCAP recording')
+    one_line_error(ftplan('replay', cut, '--png', tmp_path / 'x.jpg', cwd=tmp_path), '--png')
+    assert not (tmp_path / 'x.png').exists()

@@ -2,9 +2,10 @@
 
 core/ is layered along the data flow (core/__init__.py draws the map): a subpackage imports
 only from the layers below it, never from one above, never from outside core/. Only the
-ROS adapters (nodes/, bringup.py, plan_client.py) may import rclpy. The checks walk the
-files themselves, so that a module added in a new subpackage is checked too, and each
-asserts that it found something to check.
+ROS adapters (nodes/, bringup.py, plan_client.py) may import rclpy; the logic they adapt
+(execution/, simulation/) imports no message type either, and nothing of the adapters. The
+checks walk the files themselves, so that a module added in a new subpackage is checked
+too, and each asserts that it found something to check.
 """
 
 import ast
@@ -30,6 +31,8 @@ CORE_LAYERS = {
 # Packages and modules of ftplan_ros that may import rclpy: the ROS adapters.
 ROS_ADAPTERS = {'nodes', 'bringup', 'plan_client'}
 ROS_PACKAGES = {'rclpy', 'rosidl_runtime_py'}
+# The logic of the nodes, without ROS: what each may import of ftplan_ros besides itself.
+ROS_FREE_LOGIC = {'execution': {'core'}, 'simulation': {'core', 'execution'}}
 
 
 def module_name(path: Path) -> str:
@@ -102,6 +105,22 @@ def test_only_the_ros_adapters_import_rclpy():
             offenders.append(f'{module_name(path)} imports {sorted(ros)}')
     assert len(files) >= 80, f'found only {len(files)} modules: is the walk broken?'
     assert adapters >= 5, 'the walk found almost no ROS adapter importing rclpy'
+    assert not offenders, '\n'.join(offenders)
+
+
+@pytest.mark.parametrize('package', sorted(ROS_FREE_LOGIC))
+def test_the_logic_of_the_nodes_imports_no_ros_no_messages_and_no_adapter(package):
+    files = modules_under(PACKAGE / package)
+    allowed = {package} | ROS_FREE_LOGIC[package]
+    offenders = []
+    for path in files:
+        for imported in imported_modules(path):
+            top = imported.split('.')[0]
+            if top in ROS_PACKAGES or top.endswith('_msgs') or top == 'ftplan_msgs_py':
+                offenders.append(f'{module_name(path)} imports {imported}')
+            elif top == 'ftplan_ros' and (imported.split('.') + [''])[1] not in allowed:
+                offenders.append(f'{module_name(path)} imports {imported} (outside {allowed})')
+    assert len(files) >= 5, f'found only {len(files)} modules in {package}/'
     assert not offenders, '\n'.join(offenders)
 
 

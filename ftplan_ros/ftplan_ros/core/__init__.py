@@ -10,10 +10,12 @@ flow; each imports only from those before it (test/unit/test_layers.py checks it
                   continuum (segments, triangles, webs)
     paper/        Steps 1-2 manifolds, 3-4 failure_planes, 5-6 failure_surface,
                   7 recovery; the self-check (verification, slices); result, options
-    grid/         planar 3R joint grids: G (tolerant_set), existence proofs, the
+    grid/         planar 3R joint grids: G (tolerant_set), existence proofs, free
+                  components and the starts within an arm's reach (start_reach), the
                   recovery sheets, brute-force baselines (exhaustive)
     planning/     plan() (surface_search for r = 1, curves for r >= 2, then the
-                  recovery sheets), approach from where the arm stands, drills, warm-up
+                  recovery sheets), plans from where the arm stands (reachable, approach),
+                  drills, warm-up
     io/           scene YAML -> model objects (scene_file), files, fingerprints
 
 A plan flows: io.scene_file -> Scene (model) -> planning.plan: paper Steps 1-6 over

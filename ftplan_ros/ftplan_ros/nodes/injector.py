@@ -7,7 +7,7 @@ Each execution of a plan (the executor's 'execution' status on /diagnostics numb
 gets at most one drill, taken in order from:
 
 - `drills`: scheduled drills, one per execution. 'JOINT@F' locks JOINT when the arm has
-  done the fraction F (0..1) of the nominal path's length (nodes/motion.py): once the
+  done the fraction F (0..1) of the nominal path's length (execution/motion.py): once the
   executor commands the nominal path (/ftplan/joint_command, equal to
   /ftplan/plan/trajectory, stamped with its start), the injector publishes the lock event
   stamped with the moment that command reaches F, and the sim and the executor make it
@@ -54,8 +54,8 @@ from ftplan_msgs_py import (
     time_to_nanoseconds,
 )
 from ftplan_ros.core.model.angles import configuration_difference
+from ftplan_ros.execution.motion import time_at_fraction
 
-from .motion import time_at_fraction
 from .params import (
     add_validators,
     array_parameter,

@@ -15,7 +15,8 @@ nodes that join late:
 | `tolerated_joints` | joint names, comma-separated (e.g. 'joint1,joint3') |
 | `robot` | a digest of the robot's model (core robot_digest): joints, limits, geometry |
 | `obstacles`, `obstacle_set` | how many obstacles, and a digest naming them (obstacles.py) |
-| `approach` | how the arm gets to θ_s from where it stood (core/approach.py) |
+| `approach` | how the arm gets to θ_s from where it stood (core/planning/approach.py) |
+| `reach`, `reach_search` | the answer for the arm where it stands; how far it looked |
 
 The executor reads them from /ftplan/plan/info to tell a plan for another robot, to
 judge arrival and to name an untolerated lock, and repeats `tolerated_joints` in its
@@ -37,6 +38,7 @@ from .obstacles import obstacle_set_key
 from .reporting import parse_vector
 
 PLANNER_STATUS = 'ftplan_planner: plan'
+INFOS_KEPT = 8  # plan statuses kept by PlanInfos: the latest plans'
 
 
 def join_names(names: Sequence[str]) -> str:
@@ -111,7 +113,7 @@ def read_plan_info(values: Mapping[str, str]) -> PlanInfo | None:
 class PlanInfos:
     """The plan infos of the latest plans, by stamp (the oldest are dropped)."""
 
-    def __init__(self, size: int = 8):
+    def __init__(self, size: int = INFOS_KEPT):
         self.size = size
         self._infos: OrderedDict[str, PlanInfo] = OrderedDict()
 

@@ -24,7 +24,8 @@ from ftplan_ros.core import (
     VerificationOptions,
     plan,
 )
-from ftplan_ros.core.planning.approach import Approach, ApproachOptions, plan_from
+from ftplan_ros.core.planning.approach import ApproachOptions
+from ftplan_ros.core.planning.reachable import ReachablePlan, plan_from
 
 
 class PlanTimeout(Exception):  # noqa: N818 - a stop signal, not an error of the caller
@@ -56,9 +57,12 @@ class PlanJob:
     timeout: float
 
 
-def run_job(job: PlanJob, cache: ManifoldCache,
-            stopped: Callable[[], bool] = lambda: False) -> tuple[PlanResult, Approach | None]:
+def run_job(job: PlanJob, cache: ManifoldCache, stopped: Callable[[], bool] = lambda: False,
+            ) -> tuple[PlanResult, ReachablePlan | None]:
     """Plan `job`; with a configuration (and `approach` on), for the arm standing there.
+
+    Returns the plan and, for the arm standing there, the answer of `plan_from` (whose
+    plan it is).
 
     `cache` keeps the traced manifolds across jobs of the same seed. Raises PlanTimeout at
     the first stage of the search that starts past the timeout, or once `stopped()`.
@@ -77,4 +81,4 @@ def run_job(job: PlanJob, cache: ManifoldCache,
     reachable = plan_from(job.scene, job.q, options, rng, progress, cache, ApproachOptions(
         margin=settings.margin, rrt_time=settings.approach_time,
         proof_cells=settings.proof_cells))
-    return reachable.result, reachable.approach
+    return reachable.result, reachable

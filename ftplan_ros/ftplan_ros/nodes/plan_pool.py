@@ -42,7 +42,7 @@ from collections import OrderedDict
 from multiprocessing.connection import wait
 
 from ftplan_ros.core import InputError, PlanResult, Robot
-from ftplan_ros.core.planning.approach import Approach
+from ftplan_ros.core.planning.reachable import ReachablePlan
 
 from .plan_jobs import PlanJob, PlanTimeout
 from .plan_worker import ROBOTS_KEPT, serve
@@ -190,8 +190,8 @@ class PlanPool:
             worker.robots.add(key)
             self._idle.put(worker)
 
-    def run(self, job: PlanJob) -> tuple[PlanResult, Approach | None]:
-        """Plan `job` in a worker; return (result, approach) as `run_job` does.
+    def run(self, job: PlanJob) -> tuple[PlanResult, ReachablePlan | None]:
+        """Plan `job` in a worker; return (result, reachable) as `run_job` does.
 
         Raises PlanTimeout (past the timeout), InputError (a job the core refuses) or
         PlanWorkerError (the worker died or raised; a dead one is replaced).

@@ -52,21 +52,21 @@ class _Planner:
             self.cache, self.seed = ManifoldCache(), job.settings.seed
         job = replace(job, scene=replace(job.scene, robot=robot))
         try:
-            result, approach = run_job(job, self.cache, self.connection.poll)
+            result, reachable = run_job(job, self.cache, self.connection.poll)
         except PlanTimeout as stop:
             return ('timeout', str(stop))
         except InputError as error:
             return ('refused', error.field, error.problem)
         except Exception as error:  # noqa: BLE001 - the node answers with it
             return ('error', repr(error), traceback.format_exc())
-        return ('done', result, approach)
+        return ('done', result, reachable)
 
 
 def serve(connection: Connection) -> None:
     """Plan the jobs that come on `connection` until it closes (a worker process's main).
 
     Each message has one reply: ('warm', key, robot) loads the robot's kernels and is
-    answered ('ready',); ('plan', key, job) is answered ('done', result, approach),
+    answered ('ready',); ('plan', key, job) is answered ('done', result, reachable),
     ('timeout', line), ('refused', field, problem) or ('error', repr, traceback). The
     pool sends a message only when the worker is idle, so anything readable while it
     plans is the node hanging up (`connection.poll()` is true at EOF too): the search

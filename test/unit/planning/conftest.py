@@ -2,19 +2,11 @@
 
 import numpy as np
 import pytest
-from ftplan_testing import SCENES, robot_config
+from ftplan_testing import robot_config
 
-from ftplan_ros.core import load_scene, plan
+from ftplan_ros.core import plan
 from ftplan_ros.core.model.scene import Scene, Task
 from ftplan_ros.core.planning.drill import run_drill
-
-
-@pytest.fixture(scope='session')
-def fig3a():
-    """The scene of Fig. 3(a) and its plan."""
-    scene = load_scene(SCENES / 'fig3a.yaml')
-    return scene, plan(scene)
-
 
 # Found beforehand with a throwaway search (random collision-free configurations q1,
 # q2 = q1 + N(0, 0.5), task FK(q1) -> FK(q2)), written here as plain numbers.

@@ -69,14 +69,24 @@ def proves_yes(grid: TolerantSet) -> bool:
     if not inside.any():
         return False
     lattice = grid.lattice
-    robot, task = grid.scene.robot, grid.scene.task
-    lengths = np.asarray(robot.link_lengths, dtype=float)
     found = components(inside, lattice.periodic)
-    starts = preimage_samples(lengths, np.asarray(task.start, dtype=float), 8 * lattice.cells)
-    goals = np.vstack([grid.escape(j).goal_points for j in grid.joints] + [
-        preimage_samples(lengths, np.asarray(task.goal, dtype=float), 8 * lattice.cells)])
-    return bool(np.intersect1d(_components_at(found, lattice, starts),
-                               _components_at(found, lattice, goals)).size)
+    return bool(np.intersect1d(components_at(found, lattice, exact_starts(grid)),
+                               components_at(found, lattice, exact_goals(grid))).size)
+
+
+def exact_starts(grid: TolerantSet) -> np.ndarray:
+    """Exact start configurations (s, 3) [rad]: M_s at 8 angles of the last link per cell."""
+    task = grid.scene.task
+    return preimage_samples(np.asarray(grid.scene.robot.link_lengths, dtype=float),
+                            np.asarray(task.start, dtype=float), 8 * grid.lattice.cells)
+
+
+def exact_goals(grid: TolerantSet) -> np.ndarray:
+    """Exact goal configurations (g, 3) [rad]: each joint's escapes' and M_g's samples."""
+    task = grid.scene.task
+    return np.vstack([grid.escape(j).goal_points for j in grid.joints] + [
+        preimage_samples(np.asarray(grid.scene.robot.link_lengths, dtype=float),
+                         np.asarray(task.goal, dtype=float), 8 * grid.lattice.cells)])
 
 
 def proves_no(grid: TolerantSet) -> bool:
@@ -94,7 +104,7 @@ def proves_no(grid: TolerantSet) -> bool:
     return not shared[1:].any()
 
 
-def _components_at(found: Components, lattice, points: np.ndarray) -> np.ndarray:
+def components_at(found: Components, lattice, points: np.ndarray) -> np.ndarray:
     """Components (> 0) of the cells holding configurations (c, 3) [rad] within the limits."""
     points = points[lattice.inside(points)]
     at = found.at(lattice.cell_of(points))

@@ -54,14 +54,13 @@ from ..paper.slices import slice_problem
 from ..paper.verification import verify_surface
 from .cell_classes import supports
 from .components import components
-from .existence import proves_no
+from .existence import exact_goals, exact_starts, proves_no
 from .sheet_builder import SheetBuilder, TriangleCheck
 from .sheet_kernels import bfs, greedy_cuts, mask_triangle_free, route_cells, wrap_index
 from .tolerant_set import (
     TolerantSet,
     fits_goal_tolerance,
     pooled_tolerant_set,
-    preimage_samples,
     tolerant_set,
 )
 
@@ -272,21 +271,14 @@ def _nominal_cells(grid: TolerantSet, start_configuration: np.ndarray | None,
     Starts that `prefer_starts` marks are tried first.
     """
     lattice = grid.lattice
-    robot, task = grid.scene.robot, grid.scene.task
-    lengths = np.asarray(robot.link_lengths, dtype=float)
-    if start_configuration is not None:
-        starts = np.asarray(start_configuration, dtype=float).reshape(1, -1)
-    else:
-        starts = preimage_samples(lengths, np.asarray(task.start, dtype=float),
-                                  8 * lattice.cells)
+    starts = exact_starts(grid) if start_configuration is None else \
+        np.asarray(start_configuration, dtype=float).reshape(1, -1)
     starts = starts[lattice.inside(starts)]
     start_cells = lattice.cell_of(starts)
     inside = grid.certified_holding(start_cells)  # None: no start cell is in G
     if inside is None:
         return None
-    goals = np.vstack([grid.escape(j).goal_points for j in grid.joints]
-                      + [preimage_samples(lengths, np.asarray(task.goal, dtype=float),
-                                          8 * lattice.cells)])
+    goals = exact_goals(grid)
     goals = goals[lattice.inside(goals)]
     goal_cells = lattice.cell_of(goals)
     start_ok = inside[tuple(start_cells.T)]

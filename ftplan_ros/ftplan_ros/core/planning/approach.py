@@ -10,23 +10,19 @@ module plans those ordinary motions; none of them is failure-tolerant (issue 10)
   self-motion, the tool staying at x_s; `prefer_reachable` turns the arc into the hook
   with which `core.plan` searches them first.
 - `ApproachPlanner.approach`: a path from q to θ_s (plus whole turns of periodic
-  joints): along that arc, along M_s (`self_motion_path`), by a straight joint move, or
-  by an ordinary collision-free joint move planned with OMPL's RRT-Connect and its
-  simplifier, the joint limits as bounds and the clearance as validity.
+  joints): along that arc, along M_s (`self_motion_path`), by a straight joint move,
+  through the certified free cells of a joint grid (planar 3R arms among disks,
+  `free_components`), or by an ordinary collision-free joint move planned with OMPL's
+  RRT-Connect and its simplifier, the joint limits as bounds and the clearance as
+  validity.
 - `ApproachPlanner.path_to_goal`: with a joint locked where it stands, a configuration
   reaching the goal in its failure hyperplane (Newton from random seeds) and a path there
   in the remaining joints (straight or RRT-Connect).
-- `plan_from`: `core.plan` for an arm standing at q: starts on q's arc of M_s^F first.
-  When the plan's θ_s cannot be approached, a joint grid may prove that no
-  failure-tolerant plan starts within the arm's reach at all
-  (`free_components.tolerant_start_out_of_reach`; the approach's reason then says so);
-  without a proof, the starts on the other free arcs of M_s that a joint move reaches.
-  The result: the plan and its approach.
 
-Every path returned is certified collision-free over the continuum, not only at its
-samples: its segments, cut to at most `certify_step` [rad], pass
-`certification.certify_polylines` with the margin. Paths are (k, n) [rad], lifted
-(continuous), starting at q.
+`reachable.plan_from` plans for an arm standing at q with these motions. Every path
+returned is certified collision-free over the continuum, not only at its samples: its
+segments, cut to at most `certify_step` [rad], pass `certification.certify_polylines`
+with the margin. Paths are (k, n) [rad], lifted (continuous), starting at q.
 """
 
 from __future__ import annotations
@@ -42,17 +38,10 @@ import numpy as np
 
 from ..collision.certification import certify_polylines
 from ..collision.checker import CollisionChecker
-from ..grid.free_components import (
-    GRID_CELLS,
-    START_GRIDS,
-    FreeComponents,
-    proof_grids,
-    tolerant_start_out_of_reach,
-)
+from ..grid.free_components import GRID_CELLS, START_GRIDS, FreeComponents, proof_grids
 from ..model.angles import configuration_difference, whole_turns
 from ..model.paths import densify, path_length
 from ..model.robot import Robot, task_errors
-from ..model.scene import Scene
 from ..paper.manifolds import (
     ManifoldOptions,
     mark_obstacle_free,
@@ -60,9 +49,6 @@ from ..paper.manifolds import (
     self_motion_path,
     trace_branch,
 )
-from ..paper.options import PlannerOptions
-from ..paper.result import PlanResult
-from .planner import plan
 
 log = logging.getLogger(__name__)
 
@@ -79,6 +65,7 @@ class Route(StrEnum):
     ALONG_ARC = 'along M_s^F'
     SELF_MOTION = 'along M_s'
     STRAIGHT = 'by a straight joint move'
+    THROUGH_CELLS = 'through certified free cells of a joint grid'
     GIVEN = 'by the path given'
     RRT_CONNECT = 'by a joint move planned with RRT-Connect'
     NONE = 'no path'
@@ -98,11 +85,15 @@ class ApproachOptions:
     arc_tolerance: float = 0.05         # a configuration this close to the arc is on it [rad]
     ik_seeds: int = 64                  # `path_to_goal`: Newton seeds in the failure plane
     goal_candidates: int = 4            # `path_to_goal`: nearest goal configurations tried
-    proof_cells: int = START_GRIDS[-1]  # `plan_from`: finest grid of the out-of-reach proof
+    proof_cells: int = START_GRIDS[-1]  # `plan_from`: finest grid of the starts within reach
+    reach_starts: int = 6               # `plan_from`: starts within reach planned from at most
     manifold: ManifoldOptions = field(default_factory=ManifoldOptions)
 
     def __post_init__(self):
         proof_grids(self.proof_cells)  # a size that is not a proof grid is refused here
+        if isinstance(self.reach_starts, bool) or not isinstance(self.reach_starts, int) \
+                or self.reach_starts < 0:
+            raise ValueError(f'reach_starts must be an integer >= 0, got {self.reach_starts!r}')
 
 
 @dataclass(frozen=True, eq=False)
@@ -214,13 +205,13 @@ class ApproachPlanner:
     # Approaches ---------------------------------------------------------------------
 
     def approach(self, q: np.ndarray, theta_s: np.ndarray, arrival: float = 1e-6,
-                 arc: np.ndarray | None = None) -> Approach:
+                 arc: np.ndarray | None = None, rrt: bool = True) -> Approach:
         """Find a certified path from q (n,) to θ_s (n,) plus whole turns; say how it goes.
 
         Tried in order: q is θ_s already (within `arrival` [rad] per joint, a single
         point); along the arc of M_s^F through q (`reachable_arc`, or `arc` if given);
-        along M_s by continuation; straight joint moves (a periodic joint turning either
-        way); RRT-Connect. Only the first two keep the tool at x_s.
+        along M_s by continuation; then `joint_move` (RRT-Connect only with `rrt`). Only
+        the first two keep the tool at x_s.
         """
         robot = self.robot
         q = np.asarray(q, dtype=float)
@@ -237,15 +228,16 @@ class ApproachPlanner:
             path = self_motion_path(robot, x_s, q, theta_s, self.options.manifold)
             if path is not None and self.certify(path):
                 return Approach(path, Route.SELF_MOTION)
-        return self.joint_move(q, theta_s)
+        return self.joint_move(q, theta_s, rrt=rrt)
 
-    def joint_move(self, q: np.ndarray, target: np.ndarray,
-                   locked: int | None = None) -> Approach:
+    def joint_move(self, q: np.ndarray, target: np.ndarray, locked: int | None = None,
+                   rrt: bool = True) -> Approach:
         """Find a certified joint move from q to target (plus whole turns), `locked` held.
 
-        Straight moves first (periodic joints may turn either way), then RRT-Connect in
-        the other joints, `rrt_attempts` times, towards every end of those moves at once;
-        not where `free_components` proves that no joint move exists.
+        Straight moves first (periodic joints may turn either way), then with no joint
+        held through the certified cells of `free_components`, then (with `rrt`)
+        RRT-Connect in the other joints, `rrt_attempts` times, towards every end of those
+        moves at once; not where `free_components` proves that no joint move exists.
         """
         q = np.asarray(q, dtype=float)
         ends = straight_move_ends(q, np.asarray(target, dtype=float), self.robot.periodic,
@@ -254,15 +246,40 @@ class ApproachPlanner:
             path = np.vstack([q, end])
             if self.certify(path):
                 return Approach(path, Route.STRAIGHT)
-        free = [j for j in range(self.robot.n_joints) if j != locked]
         ends = [end for end in ends if self._valid(end)]
         if not ends:
             return Approach(None, Route.NONE, 'the target configuration collides')
-        if self.free_components is not None and all(
-                self.free_components.separated(q, end, locked) for end in ends):
+        walls = self.free_components
+        if walls is not None and locked is None:
+            found = self.through_cells(q, ends[0], walls)
+            if found.ok:
+                return found
+        if walls is not None and all(walls.separated(q, end, locked) for end in ends):
             return Approach(None, Route.NONE, 'no collision-free joint move exists (proved on '
                             f'a {GRID_CELLS}^3 joint grid: the two configurations lie in '
                             'different components of its possibly free cells)')
+        if not rrt:
+            return Approach(None, Route.NONE, 'no collision-free joint move found (not '
+                            f'straight, not through the certified cells of a {GRID_CELLS}^3 '
+                            'joint grid; RRT-Connect not tried)')
+        return self._rrt_move(q, ends, locked)
+
+    def through_cells(self, q: np.ndarray, target: np.ndarray,
+                      walls: FreeComponents) -> Approach:
+        """Find a certified path from q (n,) to target (plus whole turns) through `walls`' cells.
+
+        A chain of touching certified free cells (`FreeComponents.path`), certified again
+        as every path is.
+        """
+        path = walls.path(q, target)
+        if path is not None and self.certify(path):
+            return Approach(path, Route.THROUGH_CELLS)
+        return Approach(None, Route.NONE, 'no chain of certified free cells of the '
+                        f'{walls.lattice.cells}^3 joint grid joins them')
+
+    def _rrt_move(self, q: np.ndarray, ends: list[np.ndarray], locked: int | None) -> Approach:
+        """RRT-Connect from q towards `ends` (lifts of one target), `locked` held; certified."""
+        free = [j for j in range(self.robot.n_joints) if j != locked]
         for attempt in range(self.options.rrt_attempts):
             path = self._rrt_connect(q, ends, free)
             if path is not None and self.certify(path):
@@ -400,93 +417,6 @@ class ApproachPlanner:
         needed = self.options.margin + _RRT_EXTRA_CLEARANCE
         samples = densify(np.stack([a, b]), self.options.rrt_step)
         return bool(self.checker.min_clearance(samples, needed).min() > needed)
-
-
-@dataclass(frozen=True, eq=False)
-class ReachablePlan:
-    """A plan for an arm standing at a known configuration, and how it gets to θ_s."""
-
-    result: PlanResult
-    approach: Approach | None  # None when there is no plan
-
-
-def plan_from(scene: Scene, q: np.ndarray, options: PlannerOptions | None = None,
-              rng: np.random.Generator | None = None,
-              progress: Callable[[str], None] | None = None, cache=None,
-              approach_options: ApproachOptions | None = None) -> ReachablePlan:
-    """Plan the scene's task for an arm standing at q (n,) [rad]; see the module docstring.
-
-    With one degree of redundancy and the tool at x_s, `core.plan` searches the starts on
-    the obstacle-free arc of M_s through q first. When the plan's θ_s cannot be approached
-    from q (it lies on another arc and no joint move gets there), joint grids up to
-    `approach_options.proof_cells` per joint try to prove that no plan starts within the
-    arm's reach; unless one does, the free arcs of M_s that a joint move from q reaches
-    are preferred in a second plan. The result is the plan whose θ_s is approached, else
-    the first; `approach.ok` says whether the arm gets there, and its reason whether a grid
-    proved that no plan starts within the arm's reach.
-    """
-    options = options or PlannerOptions()
-    approach_options = approach_options or ApproachOptions(
-        margin=options.verification.margin)
-    checker = CollisionChecker(scene.robot, scene.obstacles)
-    planner = ApproachPlanner(checker, approach_options, rng)
-    q = np.asarray(q, dtype=float)
-    x_s = np.asarray(scene.task.start, dtype=float) if scene.task is not None else None
-    arc = planner.reachable_arc(x_s, q) if x_s is not None else None
-    prefer = planner.prefer_reachable(arc) if arc is not None else None
-    first = plan(scene, options, rng, progress, cache=cache, prefer_starts=prefer)
-    if not first.feasible:
-        return ReachablePlan(first, None)
-    found = planner.approach(q, first.theta_s, arc=arc)
-    if found.ok:
-        return ReachablePlan(first, found)
-    # Before the other arcs' joint moves (seconds of RRT-Connect), which a proof makes
-    # needless. The plan's starts are clear by its margin, the approach's paths by their
-    # own: the proof takes the smaller, so that it covers both.
-    if progress is not None:
-        progress('trying to prove that no plan starts within reach')
-    margin = min(options.verification.margin, approach_options.margin)
-    proved_on = tolerant_start_out_of_reach(scene, q, margin,
-                                            proof_grids(approach_options.proof_cells))
-    if proved_on is not None:
-        clear = f', clear by more than {margin:g} m' if margin > 0 else ''
-        return ReachablePlan(first, Approach(
-            None, Route.NONE, f'no failure-tolerant plan starts where the arm can get to '
-            f'from here (proved on a {proved_on}^3 joint grid: no start that may be '
-            f'failure-tolerant lies in its component of possibly free cells{clear}); to '
-            f'this plan\'s theta_s: {found.reason}'))
-    arcs = _joint_move_arcs(planner, q, first, exclude=[first.theta_s] + ([q] if arc is None
-                                                                          else [arc[0]]))
-    if arcs:
-        second = plan(scene, options, rng, progress, cache=cache,
-                      prefer_starts=planner.prefer_reachable(np.vstack(arcs)))
-        if second.feasible and second.start_preferred:
-            again = planner.approach(q, second.theta_s, arc=arc)
-            if again.ok:
-                return ReachablePlan(second, again)
-    return ReachablePlan(first, found)
-
-
-def _joint_move_arcs(planner: ApproachPlanner, q: np.ndarray, result: PlanResult,
-                     exclude: list[np.ndarray]) -> list[np.ndarray]:
-    """Return the free arcs (k, n) of the plan's M_s reached from q by a joint move.
-
-    Arcs holding a configuration of `exclude` (q's own, the θ_s that failed) are left
-    out; each other arc is tried at its middle point.
-    """
-    robot = planner.robot
-    reached = []
-    for branch in result.start_manifolds:
-        if branch.clearance is None:
-            continue
-        for first, count in branch.free_arcs(planner.options.margin):
-            points = branch.arc_points(first, count)
-            if any(np.min(np.max(np.abs(configuration_difference(points, theta, robot.periodic)),
-                                 axis=1)) <= planner.options.arc_tolerance for theta in exclude):
-                continue
-            if planner.joint_move(q, points[len(points) // 2]).ok:
-                reached.append(points)
-    return reached
 
 
 def straight_move_ends(q: np.ndarray, target: np.ndarray, periodic: np.ndarray,

@@ -3,19 +3,16 @@
 A joint that locks stays locked until it is declared repaired (the executor's `~/reset`),
 whatever the executor was doing when the event came: a lock while idle is remembered as
 much as one in an execution. `moved` tells whether a path would move a locked joint, so
-the executor never commands one. `read_lock_event` and `lock_angle_problem` are what the
-executor and the sim share of a lock event: how it is read, and the one bound on its angle.
+the executor never commands one. `lock_angle_problem` is the one bound on a lock event's
+angle, which the executor and the sim share.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from sensor_msgs.msg import JointState
 
-from ftplan_msgs_py import LockedJoint, read_locked_joint, time_to_nanoseconds
 from ftplan_ros.core.model.angles import configuration_difference
 
 LOCKED_TOLERANCE = 1e-9  # [rad] a command may differ this much from a locked joint's angle
@@ -31,32 +28,6 @@ class Lock:
     joint: int
     angle: float | None
     execution: int | None  # None: it locked while no execution was running
-
-
-def read_lock_event(msg: JointState, names: Sequence[str] | None, waiting: str,
-                    reject: Callable[[str, str | None], None],
-                    ) -> tuple[LockedJoint, int, int] | None:
-    """Read a locked-joint event, its joint's index among `names` and its stamp [ns], or refuse it.
-
-    The stamp is when the joint locks: 0 (unstamped) or one already past means at once;
-    one ahead schedules the failure (a drill), to take effect when the arm's command
-    reaches that moment. `names` is None while the node has no scene (`waiting` says what
-    it waits for). A refusal calls `reject(why, the joint's name or None)` and returns None.
-    """
-    try:
-        event = read_locked_joint(msg)
-        stamp_ns = time_to_nanoseconds(msg.header.stamp)
-    except ValueError as error:
-        reject(f'ignored locked-joint event: {error}', None)
-        return None
-    if names is None:
-        reject(f'ignored lock of {event.name}: {waiting}', event.name)
-        return None
-    if event.name not in names:
-        reject(f'ignored lock of unknown joint {event.name!r}; the arm has {list(names)}',
-               event.name)
-        return None
-    return event, list(names).index(event.name), stamp_ns
 
 
 def lock_angle_problem(name: str, angle: float | None, current: float | None,

@@ -1,4 +1,4 @@
-"""Joint-path helpers of the nodes: timing, and progress along a path.
+"""Joint-path helpers of the executor, the sim and the injector: timing, progress along a path.
 
 Paths are (k, n) [rad], lifted (continuous); joints flagged periodic wrap every 2π.
 Progress along a path is the fraction of its joint-space length (core/paths.py

@@ -1,0 +1,52 @@
+"""What the executor is set up with: its options, the obstacles it watches, its wording.
+
+The node fills `ExecutorOptions` from its parameters (the same names; README, executor
+parameters) and gives the names of the ROS interfaces its messages mention
+(`Interfaces`), so that the executor itself knows no topic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from ftplan_ros.core import CollisionChecker
+
+from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE
+
+LONGEST_LEAD = 1.0  # [s] of the nominal path's command: a longer pause would only stall
+
+
+@dataclass(frozen=True)
+class ExecutorOptions:
+    """Speeds [rad/s], tolerances [rad] and times [s] of the executor (the node's parameters)."""
+
+    max_joint_speed: float = 1.0      # fastest joint speed of the commanded trajectories
+    arrival_tolerance: float = 1e-6   # joint error at which a command counts as completed
+    max_path_offset: float = 1e-6     # farthest the stopped arm may be from the nominal path
+    path_tolerance: float = 0.1       # farthest the arm may be from its command: tracking error
+    stopped_tolerance: float = 1e-9   # two joint states this close: the arm stands still
+    stop_timeout: float = 5.0         # wait for the arm to stop after a lock
+    stop_settle_time: float = 0.2     # after a lock, before standing still counts as stopped
+    start_timeout: float = 5.0        # wait for a joint state stamped after the request
+    joint_state_timeout: float = 2.0  # silence of /joint_states that trips the watchdog
+    stall_timeout: float = 5.0        # standing still short of the end of a command
+    lock_angle_tolerance: float = DEFAULT_LOCK_ANGLE_TOLERANCE  # a lock's angle from the joint's
+    approach_time: float = 1.0        # budget of each RRT-Connect attempt of an approach
+    nominal_lead: float = 0.05        # from sending the nominal path's command to its stamp
+
+
+@dataclass(frozen=True)
+class Interfaces:
+    """How the executor's messages name the interfaces around it."""
+
+    reset_service: str   # declares locked joints repaired, e.g. 'ftplan_executor/reset'
+    robot_source: str    # where a new robot comes from, e.g. '/robot_description'
+    obstacles_fix: str   # what makes lost obstacle updates good again
+
+
+class Obstacles(Protocol):
+    """The obstacles of the moment (the scene's and the topic's): nodes/obstacles.py ObstacleSet."""
+
+    checker: CollisionChecker  # the arm against all of them
+    lost: str                  # why updates are missing ('' when none are)
