@@ -295,7 +295,7 @@ def test_self_collision_pairs_of_a_urdf_arm_are_lower_bounds(bot_urdf_file, rng)
 def test_the_screen_of_a_mesh_arm_is_its_meshes_distances(tmp_path, rng):
     """Step 2's cheap bounds (refine=False) of an arm of 300-triangle convex STL hulls.
 
-    Against dense samples of the meshes: never above, and within the sampling error
+    Against samples of the meshes 5 mm apart: never above, and within the sampling error
     below, for links against obstacles and links two apart (whose bounding spheres meet).
     Before covers, a mesh link was screened by its bounding sphere: centimetres too low.
     """
@@ -303,11 +303,11 @@ def test_the_screen_of_a_mesh_arm_is_its_meshes_distances(tmp_path, rng):
     obstacles = [random_obstacle(kind, rng, spread=0.6) for kind in ('sphere', 'box', 'cylinder')]
     checker = CollisionChecker(arm, obstacles)
     items = arm.collision_shapes
-    local = [surface_points(item.shape, 0.002) for item in items]
+    local = [surface_points(item.shape, 0.005) for item in items]
     links = checker.channel_links
     assert (links[:, 1] >= 0).sum() == 3  # links 1-3, 2-4, 1-4
     checked = 0
-    for theta in rng.uniform(-1.5, 1.5, (6, arm.n_joints)):
+    for theta in rng.uniform(-1.5, 1.5, (4, arm.n_joints)):
         screen = checker.clearance(theta[None], refine=False)[0]
         frames = arm.link_frames(theta)
         points = {item.link: posed(p, frames[item.link] @ item.placement)
@@ -316,10 +316,10 @@ def test_the_screen_of_a_mesh_arm_is_its_meshes_distances(tmp_path, rng):
             sampled = closest(points[a], points[b]) if b >= 0 else min(
                 distance_to_obstacle(obstacle, points[a]).min() for obstacle in obstacles)
             assert value <= max(sampled, 0.0) + 1e-9
-            if sampled > 0.004:
-                assert value >= sampled - 0.004, (a, b, value, sampled)
+            if sampled > 0.006:
+                assert value >= sampled - 0.006, (a, b, value, sampled)
                 checked += 1
-    assert checked >= 30
+    assert checked >= 20
 
 
 # Backends, `needed`, `refine` and culling ----------------------------------------------------
