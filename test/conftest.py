@@ -4,12 +4,15 @@ import numpy as np
 import pytest
 
 
-@pytest.fixture(autouse=True, scope='session')
-def _cache_folder(tmp_path_factory):
-    """Keep the tests' cache entries (sampled self-collision exceptions) out of the user's."""
+@pytest.fixture(scope='session', autouse=True)
+def cache_home(tmp_path_factory):
+    """Keep a test run's cache entries (mesh covers, sampled self-collision exceptions) out
+    of the user's cache: ftplan's cache folder is then XDG_CACHE_HOME/ftplan in a tmp folder."""
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv('FTPLAN_CACHE_DIR', str(tmp_path_factory.mktemp('cache')))
-        yield
+        home = tmp_path_factory.mktemp('cache')
+        patch.setenv('XDG_CACHE_HOME', str(home))
+        patch.delenv('FTPLAN_CACHE_DIR', raising=False)
+        yield home
 
 
 @pytest.fixture

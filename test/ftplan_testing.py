@@ -14,6 +14,7 @@ import numpy as np
 import yaml
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import ConvexHull
 
 from ftplan_ros.core.collision.checker import CollisionChecker
 from ftplan_ros.core.io.scene_file import parse_scene
@@ -120,6 +121,49 @@ CUBE = (np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05)
                   for z in (-0.05, 0.05)]),
         np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
                   [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]))
+
+
+def capsule_hull(length: float = 0.2, radius: float = 0.05, points: int = 152, seed: int = 0,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """A convex mesh (vertices, faces) like a robot link's collision hull, along z [m].
+
+    The hull of `points` random points on a capsule's surface (core from z = 0 to
+    `length`): 2 points - 4 triangles (300 for 152 points), like the Panda's meshes.
+    """
+    rng = np.random.default_rng(seed)
+    directions = rng.normal(size=(points, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    vertices = radius * directions
+    tube = rng.random(points) < 0.6  # on the tube, else on a cap
+    radial = directions[tube, :2] / np.linalg.norm(directions[tube, :2], axis=1)[:, None]
+    vertices[tube, :2] = radius * radial
+    vertices[tube, 2] = rng.uniform(0.0, length, tube.sum())
+    vertices[~tube & (directions[:, 2] > 0), 2] += length
+    hull = ConvexHull(vertices)
+    return vertices[hull.vertices], _reindex(hull.simplices, hull.vertices)
+
+
+def torus(major: float = 0.06, minor: float = 0.02, around: int = 24, across: int = 12,
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """A non-convex mesh (vertices, faces): a torus about z [m], 2 * around * across triangles."""
+    u, v = np.meshgrid(np.arange(around) * 2 * np.pi / around,
+                       np.arange(across) * 2 * np.pi / across, indexing='ij')
+    vertices = np.stack([(major + minor * np.cos(v)) * np.cos(u),
+                         (major + minor * np.cos(v)) * np.sin(u), minor * np.sin(v)],
+                        axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(around), np.arange(across), indexing='ij')
+    a, b = i * across + j, ((i + 1) % around) * across + j
+    c, d = ((i + 1) % around) * across + (j + 1) % across, i * across + (j + 1) % across
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                            np.stack([a, c, d], -1).reshape(-1, 3)])
+    return vertices, faces
+
+
+def _reindex(faces: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """Faces over the points `kept` (their indices into the old points), renumbered."""
+    new = np.full(kept.max() + 1, -1)
+    new[kept] = np.arange(len(kept))
+    return new[faces]
 
 
 def write_binary_stl(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
@@ -343,6 +387,39 @@ def write_cad_arm(directory: Path, **robot) -> Path:
     path = directory / 'cad_arm.yaml'
     path.write_text(yaml.safe_dump(scene))
     return path
+
+
+MESH_ARM_JOINTS = (('z', 0.1), ('y', 0.3), ('y', 0.3), ('y', 0.3))  # axis, offset [m]
+
+
+def mesh_arm(directory: Path, task_kind: str = 'position'):
+    """A 4-joint arm whose links are convex STL hulls like the Panda's (`capsule_hull`).
+
+    Joints turn about z, y, y, y, each 0.3 m beyond the last along the straight arm;
+    each link is a hull 0.05 m thick and 0.35 m long from its joint, so links overlap
+    their neighbours (exempt) and pass close to the links two away: their bounding
+    spheres meet where the hulls are centimetres apart.
+    """
+    from ftplan_ros.core.io.scene_file import robot_from_urdf
+    links, joints = ['  <link name="base"/>'], []
+    for k, (axis, offset) in enumerate(MESH_ARM_JOINTS):
+        write_binary_stl(directory / f'link{k + 1}.stl', *capsule_hull(0.25, 0.05, seed=k))
+        parent = 'base' if k == 0 else f'link{k}'
+        vector = {'z': '0 0 1', 'y': '0 1 0'}[axis]
+        joints.append(f'  <joint name="j{k + 1}" type="revolute"><parent link="{parent}"/>'
+                      f'<child link="link{k + 1}"/><origin xyz="0 0 {offset}"/>'
+                      f'<axis xyz="{vector}"/><limit lower="-2.6" upper="2.6" effort="1" '
+                      'velocity="1"/></joint>')
+        links.append(f'  <link name="link{k + 1}"><collision><origin xyz="0 0 0.05"/><geometry>'
+                     f'<mesh filename="link{k + 1}.stl"/></geometry></collision></link>')
+    joints.append('  <joint name="tip_joint" type="fixed"><parent link="link4"/>'
+                  '<child link="tip"/><origin xyz="0 0 0.35"/></joint>')
+    xml = '<robot name="mesh_arm">\n' + '\n'.join(links + ['  <link name="tip"/>'] + joints) \
+        + '\n</robot>\n'
+    (directory / 'mesh_arm.urdf').write_text(xml)
+    adjacent = [['base', 'link1']] + [[f'link{k}', f'link{k + 1}'] for k in range(1, 4)]
+    return robot_from_urdf(xml, 'tip', disabled_collisions=adjacent,
+                           mesh_dirs=[str(directory)], task_kind=task_kind)
 
 
 def slice_distance(surface, joint, theta):

@@ -12,15 +12,23 @@ Distances come in tiers, cheapest first:
 1. Exact and vectorised over thousands of configurations wherever one side is a sphere
    (the signed distance of the other shape at the sphere's centre, minus its radius):
    the paper's disks against capsule links, sphere obstacles against any link.
-2. For other pairs (a box or cylinder obstacle against a box, cylinder, capsule or mesh
-   link; two such links) the bounding sphere of the link shape gives a lower bound at
-   the same price.
+2. For other pairs (a box or cylinder obstacle against a box, cylinder or capsule link;
+   two such links) the bounding sphere of the link shape gives a lower bound at the
+   same price.
 3. Where that bound is below what the caller `needed`, python-fcl measures the pair.
    Its GJK can report distances centimetres too long, so fcl only gives a direction:
    the clearance is the shapes' separation along the line joining fcl's nearest points,
    from their support functions (geometry.separation), a lower bound whatever the
    direction. On contact the answer is 0; fcl needs capsules of radius >= 1 cm, so a
    thinner capsule also reads 0 within 1 cm of an obstacle.
+
+A mesh link is measured through its cover (model/cover.py: convex pieces whose union
+holds every point of the mesh; a convex mesh is one piece, its own hull). Its tiers 1-2
+are the least GJK bound over the pieces (convex_kernels.py). A piece that bulges less
+than `cover.TIGHT_PADDING` (1 mm; under half a millimetre for each of the Panda's
+meshes) beyond the mesh is taken for the mesh itself, as a primitive model's padding
+is: its distance counts as exact. Tier 3 measures the triangles held by the other
+pieces, exactly.
 
 Obstacles farther from the arm's reach than `CULL_DISTANCE` are dropped; a channel's
 clearance is then capped at the nearest dropped obstacle's lower bound, so it stays a
@@ -38,8 +46,15 @@ import numpy as np
 from ..model.geometry import Shape, fcl_geometry, rotation_from_rpy, separation, signed_distance
 from ..model.robot import LinkShape, PlanarChain, Robot
 from ..model.scene import Obstacle
+from .convex_kernels import (
+    HULL,
+    cover_obstacle_distances,
+    cover_pair_distances,
+    refined_distance,
+)
 from .distance_kernels import (
     CODES,
+    MESH,
     enclosing_capsule,
     exact_pairs,
     obstacle_distances,
@@ -75,11 +90,53 @@ def shape_parameters(shape: Shape) -> np.ndarray:
     return np.zeros(3)
 
 
+def piece_table(shapes: Sequence[Shape]) -> tuple[tuple, np.ndarray]:
+    """Shapes as convex pieces for convex_kernels.py: a mesh by its cover, any other whole.
+
+    Returns the table (convex_kernels.py says its layout) and piece_start (S+1,): shape s
+    is pieces piece_start[s]..piece_start[s+1]-1.
+    """
+    kinds, parameters, bounds, vertices, triangles, exact, starts = [], [], [], [], [], [], [0]
+    for shape in shapes:
+        if shape.kind == 'mesh':
+            cover = shape.cover
+            for piece, held, whole in zip(cover.pieces, cover.triangles, cover.tight,
+                                          strict=True):
+                centre = 0.5 * (piece.min(axis=0) + piece.max(axis=0))
+                kinds.append(HULL)
+                parameters.append(np.zeros(3))
+                bounds.append(np.append(centre, np.linalg.norm(piece - centre, axis=1).max()))
+                vertices.append(piece)
+                triangles.append(held)
+                exact.append(bool(whole))
+        else:
+            kinds.append(CODES[shape.kind])
+            parameters.append(shape_parameters(shape))
+            bounds.append(np.append(*shape.bounding_sphere()))
+            vertices.append(np.zeros((0, 3)))
+            triangles.append(np.zeros((0, 3, 3)))
+            exact.append(True)
+        starts.append(len(kinds))
+    table = (np.array(kinds, dtype=np.int64), np.array(parameters, dtype=float).reshape(-1, 3),
+             np.array(bounds, dtype=float).reshape(-1, 4), _starts(vertices),
+             np.ascontiguousarray(np.concatenate(vertices + [np.zeros((0, 3))]), dtype=float),
+             _starts(triangles),
+             np.ascontiguousarray(np.concatenate(triangles + [np.zeros((0, 3, 3))]), dtype=float),
+             np.array(exact, dtype=bool))
+    return table, np.array(starts, dtype=np.int64)
+
+
+def _starts(arrays: list[np.ndarray]) -> np.ndarray:
+    """Where each of the arrays starts once they are concatenated, and where the last ends."""
+    return np.cumsum([0] + [len(array) for array in arrays]).astype(np.int64)
+
+
 class _Shapes:
     """Shapes as arrays for the compiled distances.
 
     Kind codes, parameters, bounding spheres (S, 4) and enclosing capsules (S, 7), in the
-    shapes' own frames.
+    shapes' own frames; the shapes as convex pieces (`piece_table`), whether each is a
+    covered mesh (S,) and whether GJK measures it exactly (S,).
     """
 
     def __init__(self, shapes: Sequence[Shape]):
@@ -92,6 +149,10 @@ class _Shapes:
                                   for kind, parameters, bound in zip(
                                       self.kinds, self.parameters, self.bounds, strict=True)],
                                  dtype=float).reshape(-1, 7)
+        self.pieces, self.piece_start = piece_table(self.shapes)
+        self.covered = self.kinds == MESH
+        self.exact = np.array([self.pieces[7][start:end].all() for start, end in zip(
+            self.piece_start[:-1], self.piece_start[1:], strict=True)], dtype=bool)
 
 
 class _Obstacles(_Shapes):
@@ -156,15 +217,25 @@ class CollisionChecker:
              for t in np.flatnonzero(self._links == b)
              if frozenset((items[s].urdf_link, items[t].urdf_link)) not in exempt],
             dtype=np.int64).reshape(-1, 2)
-        first, second = (self._shapes.kinds[self._shape_pairs[:, k]] for k in (0, 1))
-        self._pair_modes = pair_modes(first, second)
-        self._pair_exact = exact_pairs(first, second)
-        self._fcl_shapes = [fcl.CollisionObject(fcl_geometry(shape, _FCL_PADDING))
-                            for shape in self._shapes.shapes]
+        shapes = self._shapes
+        first, second = (self._shape_pairs[:, k] for k in (0, 1))
+        # Pairs with a mesh go to convex_kernels.py; exact there when both are (GJK).
+        self._covered_pairs = shapes.covered[first] | shapes.covered[second]
+        self._pair_modes = pair_modes(shapes.kinds[first], shapes.kinds[second])
+        self._pair_exact = np.where(self._covered_pairs,
+                                    shapes.exact[first] & shapes.exact[second],
+                                    exact_pairs(shapes.kinds[first], shapes.kinds[second]))
+        self._fcl_shapes = [None if shape.kind == 'mesh' else
+                            fcl.CollisionObject(fcl_geometry(shape, _FCL_PADDING))
+                            for shape in shapes.shapes]
         self._obstacles, self._cap = self._cull(_Obstacles(self.obstacles))
-        moving_kinds = self._shapes.kinds[:self._moving, None]
-        self._modes = pair_modes(moving_kinds, self._obstacles.kinds[None, :])
-        self._exact = exact_pairs(moving_kinds, self._obstacles.kinds[None, :])
+        moving = np.arange(self._moving)
+        self._plain = moving[~shapes.covered[moving]]
+        self._covered = moving[shapes.covered[moving]]
+        kinds = shapes.kinds[moving, None], self._obstacles.kinds[None, :]
+        self._modes = pair_modes(*kinds)[self._plain]
+        self._exact = np.where(shapes.covered[moving, None], shapes.exact[moving, None],
+                               exact_pairs(*kinds))
         self.planar_disks = self._planar_disks()
 
     @property
@@ -258,12 +329,17 @@ class CollisionChecker:
     def base_clearance(self) -> np.ndarray:
         """Distance (P,) [m] from the robot's base geometry to each obstacle (<= 0: touching)."""
         out = np.full(len(self.obstacles), np.inf)
-        everything = _Obstacles(self.obstacles)
-        for item in self._items[self._moving:]:
+        everything, shapes = _Obstacles(self.obstacles), self._shapes
+        for s in range(self._moving, len(self._items)):
+            item, start = self._items[s], shapes.piece_start
             pose = (item.placement[:3, :3], item.placement[:3, 3])
             for p, (shape, rotation, centre) in enumerate(zip(
                     everything.shapes, everything.rotations, everything.centres, strict=True)):
-                out[p] = min(out[p], _pair_distance(item.shape, pose, shape, (rotation, centre)))
+                distance = refined_distance(
+                    shapes.pieces, start[s], start[s + 1], item.placement, everything.pieces, p,
+                    p + 1, everything.frames[p]) if shapes.covered[s] else \
+                    _pair_distance(item.shape, pose, shape, (rotation, centre))
+                out[p] = min(out[p], distance)
         return out
 
     # Tiers --------------------------------------------------------------------------
@@ -313,39 +389,63 @@ class CollisionChecker:
         shapes, obstacles = self._shapes, self._obstacles
         if self.backend == 'fcl':
             needed = np.full_like(needed, np.inf)
-        distance = obstacle_distances(
-            poses, shapes.kinds, shapes.parameters, shapes.bounds, shapes.capsules,
-            obstacles.kinds, obstacles.parameters, obstacles.frames, obstacles.world_bounds,
-            obstacles.capsules, self._modes, np.ascontiguousarray(needed))  # (N, S, P)
+        distance = np.empty(needed.shape + (len(obstacles),))  # (N, S, P)
+        plain, covered = self._plain, self._covered
+        if len(plain):
+            distance[:, plain] = obstacle_distances(
+                poses if not len(covered) else np.ascontiguousarray(poses[:, plain]),
+                shapes.kinds[plain], shapes.parameters[plain], shapes.bounds[plain],
+                shapes.capsules[plain], obstacles.kinds, obstacles.parameters, obstacles.frames,
+                obstacles.world_bounds, obstacles.capsules, self._modes,
+                np.ascontiguousarray(needed[:, plain]))
+        if len(covered):
+            distance[:, covered] = cover_obstacle_distances(
+                poses, covered, shapes.piece_start, shapes.pieces, obstacles.frames,
+                obstacles.pieces, np.ascontiguousarray(needed[:, covered]))
         count, shape_count, obstacle_count = distance.shape
 
         def measure(n: int, entry: int) -> float:
             s, p = divmod(entry, obstacle_count)
+            if shapes.covered[s]:
+                return refined_distance(shapes.pieces, shapes.piece_start[s],
+                                        shapes.piece_start[s + 1], poses[n, s],
+                                        obstacles.pieces, p, p + 1, obstacles.frames[p])
             return _certified_pose(self._fcl_shapes[s], shapes.shapes[s], poses[n, s],
                                    obstacles, p)
 
         return _channel_minima(distance.reshape(count, shape_count * obstacle_count),
-                               self._exact.ravel(), np.repeat(np.arange(shape_count),
-                                                              obstacle_count),
+                               self._exact.ravel(),
+                               np.repeat(np.arange(shape_count), obstacle_count),
                                needed if refine else np.full_like(needed, -np.inf), measure,
                                self.backend == 'fcl')
 
     def _pair_channels(self, poses: np.ndarray, needed: np.ndarray, refine: bool,
                        ) -> np.ndarray:
         """Tiers 1-3 for every shape pair of the self-collision pairs: (N, Q)."""
-        shapes = self._shapes
+        shapes, pairs, covered = self._shapes, self._shape_pairs, self._covered_pairs
         if self.backend == 'fcl':
             needed = np.full_like(needed, np.inf)
-        distance = pair_distances(poses, shapes.kinds, shapes.parameters, shapes.bounds,
-                                  shapes.capsules, self._shape_pairs, self._pair_modes,
-                                  np.ascontiguousarray(needed))
+        distance = np.empty(needed.shape)
+        if not covered.all():
+            distance[:, ~covered] = pair_distances(
+                poses, shapes.kinds, shapes.parameters, shapes.bounds, shapes.capsules,
+                pairs[~covered], self._pair_modes[~covered],
+                np.ascontiguousarray(needed[:, ~covered]))
+        if covered.any():
+            distance[:, covered] = cover_pair_distances(
+                poses, pairs[covered], shapes.piece_start, shapes.pieces,
+                np.ascontiguousarray(needed[:, covered]))
 
         def measure(n: int, q: int) -> float:
-            a, b = self._shape_pairs[q]
+            a, b = pairs[q]
+            if covered[q]:
+                start = shapes.piece_start
+                return refined_distance(shapes.pieces, start[a], start[a + 1], poses[n, a],
+                                        shapes.pieces, start[b], start[b + 1], poses[n, b])
             return _pair_distance(shapes.shapes[a], (poses[n, a, :3, :3], poses[n, a, :3, 3]),
                                   shapes.shapes[b], (poses[n, b, :3, :3], poses[n, b, :3, 3]))
 
-        return _channel_minima(distance, self._pair_exact, np.arange(len(self._shape_pairs)),
+        return _channel_minima(distance, self._pair_exact, np.arange(len(pairs)),
                                needed if refine else np.full_like(needed, -np.inf), measure,
                                self.backend == 'fcl')
 
@@ -381,12 +481,18 @@ class CollisionChecker:
 
 
 def _extent(item: LinkShape) -> float:
-    """Return how far [m] a shape (a sphere's or capsule's core) reaches from its link's origin."""
+    """Return how far [m] a shape (a sphere's or capsule's core) reaches from its link's origin.
+
+    A mesh's points are blends of its vertices: the farthest is a vertex.
+    """
     shape, placement = item.shape, item.placement
     if shape.kind in ('sphere', 'capsule'):
         half = 0.5 * shape.length if shape.kind == 'capsule' else 0.0
         ends = placement[:3, 3] + np.outer([-half, half], placement[:3, 2])
         return float(np.linalg.norm(ends, axis=1).max())
+    if shape.kind == 'mesh':
+        return float(np.linalg.norm(shape.vertices @ placement[:3, :3].T + placement[:3, 3],
+                                    axis=1).max())
     centre, radius = shape.bounding_sphere()
     return float(np.linalg.norm(placement[:3, :3] @ centre + placement[:3, 3])) + radius
 

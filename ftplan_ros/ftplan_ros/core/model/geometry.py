@@ -8,14 +8,19 @@ segment), and a triangle mesh (`vertices` (V, 3), `faces` (F, 3)). Lengths are m
 `signed_distance` is exact for the convex primitives; `support` bounds every shape,
 meshes included, so `separation` is a lower bound on the distance between any two
 shapes whatever direction it is given (the collision checker's certified distances).
+A mesh is measured through its `cover`: convex pieces that hold it (cover.py).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import fcl
 import numpy as np
+
+from .cover import Cover
+from .cover_cache import mesh_cover
 
 KINDS = ('sphere', 'box', 'cylinder', 'capsule', 'mesh')
 
@@ -48,6 +53,16 @@ class Shape:
         low, high = self.vertices.min(axis=0), self.vertices.max(axis=0)
         centre = 0.5 * (low + high)
         return centre, float(np.linalg.norm(self.vertices - centre, axis=1).max())
+
+    @cached_property
+    def cover(self) -> Cover:
+        """A mesh's convex pieces (cover.py), read from the cache or built on first use.
+
+        Raises ValueError for the other kinds, which are convex themselves.
+        """
+        if self.kind != 'mesh':
+            raise ValueError(f'a {self.kind} is convex: only meshes have covers')
+        return mesh_cover(self.vertices, self.faces)
 
 
 def signed_distance(shape: Shape, points: np.ndarray) -> np.ndarray:
@@ -127,7 +142,8 @@ def fcl_geometry(shape: Shape, padding: float = 0.0) -> fcl.CollisionGeometry:
     """Return the python-fcl geometry of a shape; `padding` [m] thickens spheres and capsules.
 
     fcl needs a positive radius: a capsule of radius 0 (a bare segment) is handed over
-    padded, and callers bound distances with the true shape (`separation`).
+    padded, and callers bound distances with the true shape (`separation`). A mesh is
+    its triangles (the collision checker measures meshes through their covers instead).
     """
     if shape.kind == 'sphere':
         return fcl.Sphere(max(shape.radius, padding))

@@ -9,11 +9,13 @@ same way. Joint velocity limits are the URDF's (`<limit velocity>`; 0 or none: t
 default of motion_limits.py). Collision geometry is the links' `<collision>` elements:
 boxes, cylinders, spheres, capsules and meshes (STL, OBJ, COLLADA: loaded by Pinocchio,
 through coal and assimp, from the paths the URDF gives; core/io/mesh_files.py makes them
-absolute).
+absolute). Each mesh is covered by convex pieces as it is loaded (cover.py; read from
+the cache after the first time), and its cover is logged with the padding it adds.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 
 import numpy as np
@@ -25,6 +27,8 @@ from .geometry import Shape
 from .motion_limits import default_motion_limits
 from .robot import LinkShape
 from .urdf_structure import UrdfDescription, read_urdf
+
+logger = logging.getLogger(__name__)
 
 _REVOLUTE = ('JointModelRX', 'JointModelRY', 'JointModelRZ', 'JointModelRevoluteUnaligned')
 _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
@@ -74,8 +78,10 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
         raise InputError(f'{where}.file', f'cannot load its collision geometry: '
                          f'{_one_line(error)}') from None
     model, geometry = _hold_joints_off_the_chain(model, geometry, path, where)
-    return _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
-                  where)
+    chain = _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
+                   where)
+    _log_covers(chain.shapes)
+    return chain
 
 
 def _check_chain_joints(model: pin.Model, path: list[int], mimics: Sequence[tuple[str, str]],
@@ -125,6 +131,16 @@ def _refuse_coupled_joints(mimics: Sequence[tuple[str, str]], chain: set[str], b
                              f'{follower if follower in chain else leader!r} moves the chain '
                              f'{base_link!r} -> {tip_link!r}: coupled joints are not '
                              'supported there; remove the <mimic> or choose another tip_link')
+
+
+def _log_covers(shapes: Sequence[LinkShape]) -> None:
+    """Cover every mesh now (cover.py) and log each cover's pieces and padding."""
+    for item in shapes:
+        if item.shape.kind == 'mesh':
+            cover = item.shape.cover
+            logger.info('%s: mesh of %d triangles covered by %d convex piece(s), padding '
+                        '%.2f mm', item.urdf_link, len(item.shape.faces), len(cover.pieces),
+                        1e3 * cover.largest_padding)
 
 
 def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_link: str,
