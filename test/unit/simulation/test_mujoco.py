@@ -112,7 +112,9 @@ def test_a_lock_with_brake_on_lock_stops_the_arm_soon():
     run(arm, 0.3)
     arm.lock(2, None, 0)
     run(arm, 1.0)
-    assert not arm.moving and 0.0 < arm.standstill_time < 0.5
+    # The free joints brake at the acceleration limits (planar3r's default 2 rad/s²): from
+    # 1 rad/s that takes 0.5 s, then the actuators settle.
+    assert not arm.moving and 0.5 <= arm.standstill_time < 0.7
 
 
 def test_a_colliding_command_is_reported_as_a_contact_with_its_bodies_and_depth():

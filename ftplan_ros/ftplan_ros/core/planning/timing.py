@@ -27,9 +27,6 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-import toppra
-import toppra.algorithm
-import toppra.constraint
 
 from ..collision.braking import max_safe_speed, segment_speeds
 from ..collision.checker import CollisionChecker
@@ -71,15 +68,7 @@ def time_within_limits(path: np.ndarray, limits: MotionLimits, max_step: float =
         zero = np.zeros((1, n))
         return TimedPath(points[:1].copy(), zero, zero.copy(), np.zeros(1))
     ss = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
-    spline = toppra.SplineInterpolator(ss, points)
-    constraints = [
-        toppra.constraint.JointVelocityConstraint(np.column_stack([-limits.velocity,
-                                                                   limits.velocity])),
-        toppra.constraint.JointAccelerationConstraint(np.column_stack([-limits.acceleration,
-                                                                       limits.acceleration])),
-    ]
-    solver = toppra.algorithm.TOPPRA(constraints, spline, gridpoints=ss)
-    sdd, sd, _, _ = solver.compute_parameterization(0.0, 0.0, return_data=True)
+    spline, (sdd, sd) = _parameterize(ss, points, limits)
     if sd is None:
         raise RuntimeError('TOPP-RA found no timing of the path within the limits')
     sd = np.maximum(np.asarray(sd, dtype=float), 0.0)
@@ -94,6 +83,24 @@ def time_within_limits(path: np.ndarray, limits: MotionLimits, max_step: float =
     velocities[[0, -1]] = 0.0
     accelerations[-1] = 0.0
     return _slowed_to_limits(TimedPath(points, velocities, accelerations, times), limits)
+
+
+def _parameterize(ss: np.ndarray, points: np.ndarray, limits: MotionLimits):
+    """Return TOPP-RA's spline of `points` at path positions `ss`, and (s'', s') on them."""
+    # Imported here: toppra imports matplotlib.pyplot, which the core must not load.
+    import toppra
+    import toppra.algorithm
+    import toppra.constraint
+    spline = toppra.SplineInterpolator(ss, points)
+    constraints = [
+        toppra.constraint.JointVelocityConstraint(np.column_stack([-limits.velocity,
+                                                                   limits.velocity])),
+        toppra.constraint.JointAccelerationConstraint(np.column_stack([-limits.acceleration,
+                                                                       limits.acceleration])),
+    ]
+    solver = toppra.algorithm.TOPPRA(constraints, spline, gridpoints=ss)
+    sdd, sd, _, _ = solver.compute_parameterization(0.0, 0.0, return_data=True)
+    return spline, (sdd, sd)
 
 
 def limit_ratios(timed: TimedPath, limits: MotionLimits) -> tuple[float, float, float]:
