@@ -108,7 +108,7 @@ class ObstacleSet:
             return None
         built = self._checker
         if built is None or built[0] is not base or built[1] is not obstacles:
-            scene = base.with_obstacles(obstacles) if obstacles else base
+            scene = _with_obstacles(base, obstacles)
             built = self._checker = (base, obstacles,
                                      CollisionChecker(scene.robot, scene.obstacles))
         return built[2]
@@ -171,7 +171,12 @@ class ObstacleSet:
         """Return the base scene with these obstacles added to its static ones."""
         if self.base is None:
             return None
-        return self.base.with_obstacles(self.obstacles) if self.obstacles else self.base
+        return _with_obstacles(self.base, self.obstacles)
 
     def __len__(self) -> int:
         return len(self.obstacles)
+
+
+def _with_obstacles(base: Scene, obstacles: tuple[Obstacle, ...]) -> Scene:
+    """Return `base` with `obstacles` added to its static ones (`base` itself for none)."""
+    return base.with_obstacles(obstacles) if obstacles else base
