@@ -62,9 +62,9 @@ def sample_collisions(model: ChainModel, samples: int, rng: np.random.Generator,
     `samples` configurations uniform within the joint limits ((-π, π] for continuous
     joints), drawn from `rng`.
     """
-    limits = SpatialArm(model).limits
-    thetas = rng.uniform(limits[:, 0], limits[:, 1], size=(samples, model.n_joints))
-    contacts = Contacts(SpatialArm(model), sampled_pairs(model))
+    arm = SpatialArm(model)
+    thetas = rng.uniform(arm.limits[:, 0], arm.limits[:, 1], size=(samples, model.n_joints))
+    contacts = Contacts(arm, sampled_pairs(model))
     touching = np.zeros(len(contacts.pairs), dtype=np.int64)
     for start in range(0, samples, _CHUNK):
         touching += contacts.touching(thetas[start:start + _CHUNK]).sum(axis=0)

@@ -103,7 +103,3 @@ class ChainModel:
         links = sorted({item.link for item in self.shapes})
         return tuple((a, b) for k, a in enumerate(links) for b in links[k + 1:]
                      if (a, b) not in self.disabled_pairs)
-
-    def adjacent_pairs(self) -> frozenset[tuple[int, int]]:
-        """Links joined by a joint: (j, j+1) for every joint j."""
-        return frozenset((j, j + 1) for j in range(self.n_joints))

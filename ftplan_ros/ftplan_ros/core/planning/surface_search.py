@@ -37,7 +37,7 @@ from ..paper.failure_surface import (
     lift_goal_arc,
     smallest_windows,
 )
-from ..paper.held_joints import held_joints, same_angle
+from ..paper.held_joints import HELD_TOLERANCE, held_joints, same_angle
 from ..paper.manifolds import (
     ManifoldCache,
     SelfMotionManifold,
@@ -533,7 +533,7 @@ def _necessary_condition_reason(names: tuple[str, ...], options: list[list[int]]
         reason = ('no candidate θ_s passes the necessary condition for every joint at '
                   f'once: the starts nearest to it miss the failure planes of {sets}')
     for j in options[0] if everywhere else ():
-        if all(np.ptp(points[:, j]) < 1e-6 for points in arc_points):
+        if all(np.ptp(points[:, j]) < HELD_TOLERANCE for points in arc_points):
             angles = sorted({round(float(points[0, j]), 4) for points in arc_points})
             reason += (f'. {names[j]} keeps its angle along each branch of the goal\'s '
                        f'self-motion ({", ".join(map(str, angles))} rad: the self-motion '
