@@ -149,9 +149,7 @@ def _at_least(value: int, least: int, flag: str, most: int = 2 ** 62) -> None:
 
 def _plan(args: argparse.Namespace, progress: Progress):
     """Check the flags (before any work), load the scene and plan it."""
-    png = getattr(args, 'png', None)
-    if png is not None and png.suffix.lower() != '.png':
-        raise InputError('--png', f'figures are PNG files: give a path ending in .png, not {png}')
+    _check_png(getattr(args, 'png', None))
     _at_least(args.seed, 0, '--seed')
     scene = load_scene(args.scene)
     if not np.isfinite(args.margin) or args.margin < 0:
@@ -264,10 +262,14 @@ def _study_command(args: argparse.Namespace) -> int:
     return run_study_command(args.spec, args.out, args.scheduler, args.workers, Progress())
 
 
+def _check_png(png: Path | None) -> None:
+    """Raise InputError unless `png` (a --png flag's path) is None or ends in .png."""
+    if png is not None and png.suffix.lower() != '.png':
+        raise InputError('--png', f'figures are PNG files: give a path ending in .png, not {png}')
+
+
 def _replay_command(args: argparse.Namespace) -> int:
-    if args.png is not None and args.png.suffix.lower() != '.png':
-        raise InputError('--png', f'figures are PNG files: give a path ending in .png, not '
-                         f'{args.png}')
+    _check_png(args.png)
     from .recording.bag_reader import open_bag  # ROS message readers load for replays only
     from .recording.replay import describe_run, draw_recorded_run, recorded_runs, recorded_scene
     with open_bag(args.recording) as bag:

@@ -71,6 +71,7 @@ from .params import (
     declare,
     destroyed_if_start_fails,
     non_negative,
+    options_from_parameters,
     positive,
 )
 from .plan_assembly import LatchedPlan, PlanTopics
@@ -194,8 +195,7 @@ class ExecutorNode(Node):
 
     def _options(self) -> ExecutorOptions:
         """Return the logic's options from the parameters of the same names."""
-        return ExecutorOptions(**{field.name: float(self.get_parameter(field.name).value)
-                                  for field in fields(ExecutorOptions)})
+        return options_from_parameters(self, ExecutorOptions)
 
     def _motion_limits(self, robot: Robot) -> MotionLimits | None:
         """Return the limits of `joint_limits_file` for `robot` (None: none given)."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -149,3 +150,9 @@ def check_startup_parameters(node: Node, validators: dict[str, Validator]) -> No
         problem = validator(parameter.value)
         if problem:
             raise InputError(name, problem)
+
+
+def options_from_parameters(node: Node, options_class):
+    """Return an `options_class` (a dataclass) from the node's parameters of its fields' names."""
+    return options_class(**{field.name: node.get_parameter(field.name).value
+                            for field in fields(options_class)})

@@ -85,6 +85,7 @@ from .params import (
     declare_array,
     destroyed_if_start_fails,
     non_negative,
+    options_from_parameters,
     positive,
 )
 from .qos import EVENT_QOS_DEPTH, SERVICE_QOS
@@ -246,9 +247,7 @@ class SimNode(Node):
 
     def _arm_options(self) -> ArmOptions:
         """Return the arm's options from the parameters of the same names."""
-        return ArmOptions(float(self.get_parameter('max_joint_speed').value),
-                          bool(self.get_parameter('brake_on_lock').value),
-                          float(self.get_parameter('lock_angle_tolerance').value))
+        return options_from_parameters(self, ArmOptions)
 
     def _parameters_set(self, parameters: list[Parameter]) -> None:
         if self.arm is not None:

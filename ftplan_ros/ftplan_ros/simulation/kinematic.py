@@ -197,7 +197,7 @@ class KinematicArm:
         previous = self.q
         until, due = self._due_locks(before, self.time)
         swept = None
-        velocity = self._velocity(until)
+        velocity = self._velocity(until) if due else None  # taken before the motion ends
         if self.motion is not None:
             swept, finished = self.motion.swept(before, until)
             swept[0] = previous
