@@ -5,11 +5,11 @@ The translation is checked against our own kinematics; the arm is stepped by han
 """
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 import numpy as np
 import pytest
+from ftplan_testing import ROBOTS, SCENES
 
 from ftplan_ros.core import CollisionChecker, InputError, load_scene
 from ftplan_ros.core.model.scene import Obstacle
@@ -22,8 +22,6 @@ from ftplan_ros.simulation.mujoco_model import (
     read_physics_options,
 )
 
-CONFIG = Path(__file__).resolve().parents[3] / 'config'
-SCENES = CONFIG / 'scenes'
 DT = 0.01  # [s] a step at 100 Hz
 
 
@@ -36,7 +34,7 @@ class Obstacles:
 
 
 def physics_for(robot) -> PhysicsOptions:
-    path = find_physics_file(CONFIG / 'robots', robot.joint_names)
+    path = find_physics_file(ROBOTS, robot.joint_names)
     return read_physics_options(path.read_text(), path.name)
 
 
@@ -157,7 +155,7 @@ def test_a_bad_physics_file_names_the_field_to_fix():
 
 
 def test_the_physics_file_is_found_by_the_robots_joint_names():
-    assert find_physics_file(CONFIG / 'robots', ['panda_joint1']).name == 'panda_mujoco.yaml'
-    assert find_physics_file(CONFIG / 'robots', ['joint1', 'joint2', 'joint3']).name == \
+    assert find_physics_file(ROBOTS, ['panda_joint1']).name == 'panda_mujoco.yaml'
+    assert find_physics_file(ROBOTS, ['joint1', 'joint2', 'joint3']).name == \
         'planar3r_mujoco.yaml'
-    assert find_physics_file(CONFIG / 'robots', ['no_such_joint']) is None
+    assert find_physics_file(ROBOTS, ['no_such_joint']) is None
