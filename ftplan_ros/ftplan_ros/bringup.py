@@ -89,6 +89,8 @@ class RunReport:
     contacts: int = 0          # MuJoCo's contacts (--sim mujoco)
     tracking_error: float = float('nan')   # largest |q - commanded| of a joint (mujoco)
     standstill_time: float = float('nan')  # lock -> the arm stands (mujoco)
+    braking_clearance: float = float('nan')  # smallest from the lock to the stop after it
+    braking_deviation: float = float('nan')  # ∞-norm of the stop from the lock point
 
 
 class Suite:
@@ -178,11 +180,14 @@ class Director:
         mark = client.status_mark
         try:
             report = client.execute(self.motion, timeout=timeout)
-            # The executor may finish before the sim has stopped: record until it has.
+            # The executor may finish before the sim has stopped (at the goal, or after a
+            # failure, when MuJoCo may still see a contact): record until it has. A failed
+            # run's arm may have stood before (braking): a status after the failure counts.
+            succeeded = report.result is Outcome.SUCCEEDED
             arm = client.wait_for_status(
                 SIM_STATUS, lambda v: v.get('resets') == resets and v.get('state') == 'stopped'
-                and v.get('goal_reached') == 'True', 2.0 if report.result is Outcome.SUCCEEDED
-                else 0.0, mark) or client.status(SIM_STATUS)
+                and (v.get('goal_reached') == 'True' or not succeeded), 2.0,
+                mark if succeeded else client.status_mark) or client.status(SIM_STATUS)
         finally:
             client.spin_until(lambda: False, 0.05)  # the last joint states of the run
             self._record = False
@@ -207,7 +212,8 @@ class Director:
             collisions, np.array(parse_vector(lock)) if lock else None,
             np.array(self.recording) if record and self.recording else None, missed,
             contacts, parse_number(sim.get('tracking_error_rad')),
-            parse_number(sim.get('standstill_s')))
+            parse_number(sim.get('standstill_s')), parse_number(sim.get('braking_clearance_m')),
+            report.number('braking_deviation_rad'))
 
 
 def _judge(report, sim: dict, collisions: int, contacts: int) -> tuple[bool, str]:
@@ -258,10 +264,22 @@ def summarize(scene: Scene, motion: PlannedMotion, runs: Sequence[RunReport]) ->
         lines.append(f'recovery time p50 {np.percentile(recoveries, 50):.2f} s, p95 '
                      f'{np.percentile(recoveries, 95):.2f} s over {len(recoveries)} '
                      'recoveries')
-    lines += physics_figures(runs)
+    lines += braking_figures(runs) + physics_figures(runs)
     lines.append(f'{sum(r.ok for r in runs)}/{len(runs)} runs reached the goal without '
                  f'collision{count_drills(runs)}')
     return '\n'.join(lines)
+
+
+def braking_figures(runs: Sequence[RunReport]) -> list[str]:
+    """Say how the runs' locks braked: the smallest clearance, the largest deviation."""
+    clearance = [r.braking_clearance for r in runs if np.isfinite(r.braking_clearance)]
+    deviation = [r.braking_deviation for r in runs if np.isfinite(r.braking_deviation)]
+    if not clearance and not deviation:
+        return []
+    return [f'braking after {len(clearance)} lock(s): smallest clearance '
+            f'{min(clearance, default=float("nan")):.4f} m, largest deviation from the lock '
+            f'point {max(deviation, default=float("nan")):.4f} rad (∞-norm, '
+            f'{len(deviation)} measured)']
 
 
 def physics_figures(runs: Sequence[RunReport]) -> list[str]:

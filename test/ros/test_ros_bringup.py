@@ -28,6 +28,19 @@ def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tm
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b'\x89PNG'
     assert 'run 1/1: joint2@0.4 -> reached' in err
     assert 'approach: ' in err  # how the arm gets to θ_s, from the planner's status
+    clearance, deviation = braking_figures(out, locks=1)
+    assert 0.0 < clearance < 1.0 and 0.0 <= deviation < 0.1
+
+
+def braking_figures(out: str, locks: int) -> tuple[float, float]:
+    """The bringup's braking line: (smallest clearance [m], largest deviation [rad])."""
+    line = next(line for line in out.splitlines() if line.startswith('braking after '))
+    head, tail = line.split(': smallest clearance ')
+    assert head == f'braking after {locks} lock(s)'
+    clearance, rest = tail.split(' m, largest deviation from the lock point ')
+    deviation, measured = rest.split(' rad (∞-norm, ')
+    assert measured == f'{locks} measured)'
+    return float(clearance), float(deviation)
 
 
 def test_a_drill_that_cannot_land_during_the_motion_is_not_drilled_and_exits_1(processes):
@@ -168,3 +181,5 @@ def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(proce
         physics = next(line for line in out.splitlines() if line.startswith('physics: '))
         assert physics.startswith('physics: 0 MuJoCo contacts, largest tracking error ')
         assert 'standstill after a lock at most -' not in physics  # each lock was timed
+        clearance, deviation = braking_figures(out, locks=len(drills))
+        assert 0.0 < clearance < 1.0 and 0.0 <= deviation < 0.1

@@ -271,7 +271,7 @@ class Run:
         if ex.lock_phase == State.APPROACHING:
             way = with_joints_left(self._planner(), ex, q, name)
         else:
-            start = self._lock_point(q)
+            start = ex.lock_point = self._lock_point(q)
             ex.lock_progress, _ = progress_along(ex.nominal, start)
             ex.progress = ex.lock_progress
             way = within_surface(ex, q, start, name, options.max_path_offset)
@@ -285,16 +285,17 @@ class Run:
     def _lock_point(self, q: np.ndarray) -> np.ndarray:
         """Return where on the nominal path the arm, stopped at q (n,), braked from.
 
-        The point of the locked joint's angle whose certified braking box holds q
-        (core/collision/braking.py); q itself when none does (the arm stopped on the path,
-        or off every box: recovery then refuses it).
+        The point of the locked joint's angle (within `max_path_offset`) whose certified
+        braking box holds q (core/collision/braking.py); q itself when none does (the arm
+        stopped on the path, or off every box: recovery then refuses it).
         """
         ex = self.record
         sent = ex.nominal_command
         if sent is None or len(sent.path) < 2:
             return q
         speeds = segment_speeds(sent.path, sent.velocities, sent.times)
-        p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint)
+        p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint,
+                       self.host.options.max_path_offset)
         return q if p is None else p
 
     # Obstacles ----------------------------------------------------------------------

@@ -69,6 +69,7 @@ class Execution:
     lock_received: float | None = None
     lock_progress: float | None = None
     lock_configuration: np.ndarray | None = None
+    lock_point: np.ndarray | None = None   # where on the nominal path it braked from
     recovery_length: float | None = None
     stop_requested: float | None = None
     finished: float | None = None
@@ -81,6 +82,13 @@ class Execution:
     lock_phase: State | None = None  # the phase the lock came in
     commanded: float = 0.0           # monotonic [s] of the last command
     reapproach: bool = False         # stopped on the approach (an obstacle): approach again
+
+    @property
+    def braking_deviation(self) -> float | None:
+        """[rad] how far (∞-norm) the arm braked from its lock point; None without one."""
+        if self.lock_point is None or self.lock_configuration is None:
+            return None
+        return float(np.max(np.abs(self.lock_configuration - self.lock_point)))
 
     @property
     def nominal(self) -> np.ndarray:

@@ -448,6 +448,8 @@ def status_values(status: Status) -> dict[str, object]:
         if ex.lock_configuration is not None:
             values.update(lock_configuration=format_vector(ex.lock_configuration),
                           recovery_length_rad=ex.recovery_length)
+        if ex.braking_deviation is not None:
+            values['braking_deviation_rad'] = ex.braking_deviation
         if ex.lock_phase is not None:
             values['lock_phase'] = ex.lock_phase.value
         if ex.finished is not None:

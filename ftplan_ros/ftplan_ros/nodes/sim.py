@@ -38,7 +38,8 @@ Arrival is judged with the core's task errors: the tool within `goal_tolerance` 
 the goal's position and, for axis and pose tasks, within `orientation_tolerance` [rad]
 of its orientation; the goal is the scene task's, taken as a task of kind `task_kind`
 ('' = the scene's; set it like the planner's). A collision is exact; `min_clearance_m`
-is measured exactly at the samples found closest since the last stop (clearance.py). A
+is measured exactly at the samples found closest since the last stop (clearance.py), and
+`braking_clearance_m` likewise from a lock to the stop after it. A
 scene file without a robot takes it from /robot_description (scene_source.py); until
 then the sim publishes nothing.
 """
@@ -375,6 +376,7 @@ class SimNode(Node):
         elif isinstance(outcome, Refused):
             self.diagnostics.rejected('input', f'ignored locked-joint event: {outcome.problem}')
         elif isinstance(outcome, Locked):
+            self.monitor.begin_braking()
             if outcome.jump is not None:
                 gap = float(np.diff(outcome.jump[:, outcome.joint])[0])
                 self.get_logger().warning(f'{name} locks at {outcome.angle:.6f} rad, '
@@ -490,6 +492,7 @@ class SimNode(Node):
             'locked': ','.join(self.names[j] for j in sorted(self.arm.locked)),
             'collisions': self.monitor.collisions,
             'min_clearance_m': self.monitor.min_clearance,
+            'braking_clearance_m': self.monitor.braking_clearance,
             'goal_reached': self.goal_reached,
             'goal_error_m': self.goal_error,
             'goal_orientation_error_rad': self.goal_orientation_error,

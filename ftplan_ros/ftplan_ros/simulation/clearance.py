@@ -3,7 +3,8 @@
 Every sample of the motion is screened cheaply (the checker's bound, exact only where it
 sees a contact), so a collision is exact; the smallest clearance is measured exactly at
 the CLOSEST_SAMPLES samples the screen found closest since it was last measured (at each
-stop of the arm): the screen alone would report its bound.
+stop of the arm): the screen alone would report its bound. The motion from a lock to
+the next stop, the braking, has a smallest clearance of its own.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ class ClearanceMonitor:
         """Start counting afresh (a new arm, or a reset)."""
         self.collisions = 0
         self.min_clearance = float('inf')
+        self.braking_clearance = float('inf')  # from a lock to the stop after it
+        self._braking = False
         # The samples with the smallest screened clearance since the last measurement, as
         # a heap of (-bound, sample number, configuration).
         self._closest: list[tuple[float, int, np.ndarray]] = []
@@ -53,6 +56,8 @@ class ClearanceMonitor:
         colliding = not clearance[worst] > 0.0  # a NaN clearance reads as a collision
         if colliding:
             self.min_clearance = min(self.min_clearance, float(clearance[worst]))
+            if self._braking:
+                self.braking_clearance = min(self.braking_clearance, float(clearance[worst]))
         for bound, q in zip(clearance.tolist(), samples, strict=True):
             self._samples += 1
             entry = (-bound, self._samples, q.copy())
@@ -67,11 +72,19 @@ class ClearanceMonitor:
             return Collision(samples[worst].copy(), float(clearance[worst]))
         return None
 
+    def begin_braking(self) -> None:
+        """Count what is checked from now to the next stop as braking (a joint locked)."""
+        self.measure_closest()
+        self._braking = True
+
     def measure_closest(self) -> None:
         """Measure exactly the samples the screen found closest since the last time."""
+        braking, self._braking = self._braking, False
         if not self._closest:
             return
         samples = np.array([q for _, _, q in self._closest])
         self._closest = []
-        exact = self.obstacles.checker.min_clearance(samples)
-        self.min_clearance = min(self.min_clearance, float(exact.min()))
+        exact = float(self.obstacles.checker.min_clearance(samples).min())
+        self.min_clearance = min(self.min_clearance, exact)
+        if braking:
+            self.braking_clearance = min(self.braking_clearance, exact)

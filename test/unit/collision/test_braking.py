@@ -7,6 +7,7 @@ from ftplan_testing import paper_scene
 from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.collision.braking import (
     braking_distances,
+    lock_point,
     max_safe_speed,
     segment_speeds,
 )
@@ -91,3 +92,29 @@ def test_the_plan_reports_the_speed_its_braking_boxes_certify(fig3a):
     assert speed == pytest.approx(max_safe_speed(
         checker, timed.positions, segment_speeds(timed.positions, timed.velocities, timed.times),
         limits.acceleration))
+
+
+PATH = np.array([[0.0, 0.0, 0.0], [0.1, 0.2, 0.0], [0.2, 0.2, 0.1]])  # joint 1 peaks at 0.2
+SPEEDS = np.full((2, 3), 0.5)        # [rad/s]: braking reach 0.0625 rad at 2 rad/s²
+DECELERATION = np.full(3, 2.0)
+
+
+def test_the_lock_point_lies_on_the_path_at_the_locked_angle_nearest_the_stop():
+    stop = np.array([0.06, 0.1, 0.01])   # braked past the path's point (0.05, 0.1, 0)
+    assert np.allclose(lock_point(PATH, SPEEDS, DECELERATION, stop, 1), [0.05, 0.1, 0.0])
+
+
+def test_a_brake_holding_past_the_paths_range_of_the_joint_finds_it_within_the_tolerance():
+    """A physics brake holds joint 1 at 0.2003 rad, beyond the 0.2 rad the path peaks at:
+    without a tolerance no point of the path has that angle (issue 37, MuJoCo drills)."""
+    stop = np.array([0.11, 0.2003, 0.01])
+    assert lock_point(PATH, SPEEDS, DECELERATION, stop, 1) is None
+    p = lock_point(PATH, SPEEDS, DECELERATION, stop, 1, tolerance=1e-3)
+    assert p[1] == stop[1]
+    assert np.max(np.abs(p - stop)) <= 0.01 + 1e-12
+    assert lock_point(PATH, SPEEDS, DECELERATION, stop, 1, tolerance=1e-4) is None
+
+
+def test_a_stop_outside_every_braking_box_has_no_lock_point():
+    stop = np.array([0.3, 0.1, 0.0])     # 0.25 rad from the path in joint 0
+    assert lock_point(PATH, SPEEDS, DECELERATION, stop, 1, tolerance=1e-3) is None

@@ -158,3 +158,16 @@ def test_locating_a_lock_checks_its_arguments_before_the_compiled_search(plans):
         with pytest.raises(InputError, match='nominal path that is not two or more finite'):
             locate_on_nominal_path(replace(surface, paths=paths), theta, 0)
     assert locate_on_nominal_path(surface, theta, np.int64(1))[0] >= 0
+
+
+def test_a_lock_slipped_past_a_turn_of_its_angle_is_located_at_the_turn():
+    """Issue 37: a physics brake held joint 2 0.003 rad past where its angle peaks on the
+    nominal path. The lock was located at a far crossing of that angle (0.1 rad away), and
+    the recovery refused it as 'not on the nominal path'."""
+    nominal = np.array([[0.0, 0.0, 0.0], [0.2, 0.5, 0.0], [0.4, 0.4, 0.0], [1.0, 0.6, 0.0]])
+    surface = FailureSurface(np.stack([nominal, nominal + [0.0, 0.0, 0.3]]), 0, (), (0,))
+    slipped = nominal[1] + [0.0, 0.003, 0.0]          # past the peak of 0.5, at 0.2 rad
+    segment, point = locate_on_nominal_path(surface, slipped, 1, max_offset=0.02)
+    assert segment in (0, 1) and np.allclose(point, nominal[1])
+    with pytest.raises(InputError, match=r'not on the nominal path \(0\.509 rad away\)'):
+        locate_on_nominal_path(surface, slipped, 1, max_offset=0.002)  # a slip beyond it

@@ -58,3 +58,20 @@ def test_the_checker_of_the_moment_is_used_and_clear_starts_afresh():
     assert monitor.check(sweep(0.0, 0.6)) is not None
     monitor.clear()
     assert monitor.collisions == 0 and monitor.min_clearance == float('inf')
+
+
+def test_the_braking_clearance_is_the_smallest_from_a_lock_to_the_next_stop():
+    monitor = ClearanceMonitor(Obstacles(CHECKER))
+    before, braking, after = sweep(0.1, 0.22, 50), sweep(-0.1, 0.05, 50), sweep(-0.2, -0.28, 50)
+    exact = [CHECKER.min_clearance(part).min() for part in (before, braking, after)]
+    assert exact[1] > max(exact[0], exact[2]) and min(exact) > 0.0  # braking: the clearest
+    monitor.check(before)
+    monitor.begin_braking()
+    monitor.check(braking)
+    monitor.measure_closest()                                # the arm stands: braking over
+    monitor.check(after)
+    monitor.measure_closest()
+    assert monitor.braking_clearance == pytest.approx(exact[1], abs=1e-12)
+    assert monitor.min_clearance == pytest.approx(min(exact), abs=1e-12)
+    monitor.clear()
+    assert monitor.braking_clearance == float('inf')

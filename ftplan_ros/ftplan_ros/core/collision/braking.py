@@ -95,29 +95,29 @@ def _scaling(room: np.ndarray, braking: np.ndarray) -> float:
 
 
 def lock_point(positions: np.ndarray, speeds: np.ndarray, deceleration: np.ndarray,
-               q: np.ndarray, joint: int) -> np.ndarray | None:
+               q: np.ndarray, joint: int, tolerance: float = 0.0) -> np.ndarray | None:
     """Return where on the path (k, n) the arm braked to q (n,) from, with `joint` locked.
 
     The point p of the path with p[joint] = q[joint] whose segment's braking box
     (`max_safe_speed`: the segment widened by d of its `speeds` (k-1, n) at
     `deceleration`) holds q, the nearest to q; None if no box holds q. The straight move
-    from q back to p lies in that box: certified when the box is.
+    from q back to p lies in that box: certified when the box is. A brake that holds the
+    joint up to `tolerance` [rad] beyond a segment's range of it (a real brake slips; a
+    physics sim's does) still finds that segment: p is then its nearest end in that joint,
+    that far off the path (as `recover`'s `max_offset` allows).
     """
     a, b = positions[:-1], positions[1:]
     reach = braking_distances(np.asarray(speeds, dtype=float), deceleration)
     inside = np.all((q >= np.minimum(a, b) - reach) & (q <= np.maximum(a, b) + reach), axis=1)
+    level = q[joint]
+    low = np.minimum(a[:, joint], b[:, joint]) - tolerance
+    high = np.maximum(a[:, joint], b[:, joint]) + tolerance
     best, nearest = None, np.inf
-    for k in np.flatnonzero(inside):
+    for k in np.flatnonzero(inside & (low <= level) & (level <= high)):
         rise = b[k, joint] - a[k, joint]
-        if rise == 0.0:
-            share = 0.0 if a[k, joint] == q[joint] else None
-        else:
-            share = (q[joint] - a[k, joint]) / rise
-            share = share if 0.0 <= share <= 1.0 else None
-        if share is None:
-            continue
+        share = 0.0 if rise == 0.0 else min(1.0, max(0.0, (level - a[k, joint]) / rise))
         p = a[k] + share * (b[k] - a[k])
-        p[joint] = q[joint]
+        p[joint] = level
         gap = float(np.max(np.abs(q - p)))
         if gap < nearest:
             best, nearest = p, gap

@@ -51,7 +51,7 @@ def locate_on_nominal_path(surface: FailureSurface, theta: np.ndarray, joint: in
 
     Among the nominal segments that reach the locked value, the point nearest θ is taken;
     it must lie within `max_offset` [rad] of θ, or θ is not on the nominal path. A locked
-    value up to `max_offset` past either end of the path's range counts as that end.
+    value up to `max_offset` past a segment's range counts as the segment's nearer end.
     Raises InputError for bad arguments (as `recover`) or a nominal path that is not two
     or more finite points.
     """
@@ -95,20 +95,18 @@ def _nearest_at_level(path, theta, joint, max_offset):
     """`locate_on_nominal_path` on the path (W+1, n): (segment or -1, point (n,), its gap).
 
     -1 when no segment reaches the level; the gap [rad] is the point's distance from θ.
+    A segment whose range of the joint misses θ's angle by at most `max_offset` reaches
+    it at its nearer end: a brake that holds the joint up to that far past a turn of its
+    angle is located there, not at a far crossing of the angle.
     """
-    low, high = path[0, joint], path[0, joint]
-    for w in range(1, path.shape[0]):
-        low, high = min(low, path[w, joint]), max(high, path[w, joint])
-    level = min(max(theta[joint], low), high)
-    if abs(level - theta[joint]) > max_offset:
-        level = theta[joint]  # out of range: no segment reaches it
     n = path.shape[1]
     best, best_gap = -1, np.inf
     best_point = np.empty(n)
     point = np.empty(n)
     for w in range(path.shape[0] - 1):
         a, b = path[w], path[w + 1]
-        if not (min(a[joint], b[joint]) <= level <= max(a[joint], b[joint])):
+        level = min(max(theta[joint], min(a[joint], b[joint])), max(a[joint], b[joint]))
+        if abs(level - theta[joint]) > max_offset:
             continue
         rise = b[joint] - a[joint]
         along, square = 0.0, 0.0
