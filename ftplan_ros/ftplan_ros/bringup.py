@@ -32,13 +32,14 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.context import Context
 from rclpy.logging import LoggingSeverity
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 
-from ftplan_msgs_py import read_joint_state
+from ftplan_msgs_py import read_diagnostic_status, read_joint_state
 
 from .core import InputError, Scene, check_plannable, load_scene
 from .core.model.task_space import describe_point
@@ -50,6 +51,7 @@ from .nodes.reporting import parse_number, parse_vector
 from .nodes.sim import SIM_BACKENDS, SimNode
 from .nodes.spinning import BackgroundSpin, RclError
 from .nodes.topics import (
+    DIAGNOSTICS,
     EXECUTOR_NODE,
     INJECTOR_NODE,
     JOINT_STATES,
@@ -136,9 +138,14 @@ class Director:
         self.motion: PlannedMotion | None = None
         self.recording: list[np.ndarray] = []
         self._record = False
+        # The drill armed for each execution, as the injector says it: kept here, as it
+        # comes, because a long run's statuses overflow the client's bounded log (an
+        # executor at 10 Hz for 50 s), and the run read as one without a drill.
+        self.drills: dict[str, str] = {}
         names = list(scene.robot.joint_names)
         client.create_subscription(JointState, JOINT_STATES,
                                    lambda msg: self._joint_state(msg, names), 100)
+        client.create_subscription(DiagnosticArray, DIAGNOSTICS, self._injector_status, 50)
 
     def _joint_state(self, msg: JointState, names: list[str]) -> None:
         if self._record:
@@ -146,6 +153,16 @@ class Director:
                 self.recording.append(read_joint_state(msg, names))
             except ValueError:
                 pass
+
+    def _injector_status(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            try:
+                reading = read_diagnostic_status(status)
+            except ValueError:
+                continue
+            execution = reading.values.get('execution')
+            if reading.name == INJECTOR_STATUS and execution and 'drill' in reading.values:
+                self.drills[execution] = reading.values['drill']
 
     def plan(self, timeout: float = 60.0) -> PlannedMotion:
         """Plan the scene's task; a failed plan names the planner's reason."""
@@ -192,10 +209,7 @@ class Director:
             client.spin_until(lambda: False, 0.05)  # the last joint states of the run
             self._record = False
         values = report.values
-        drill = ''
-        for reading in client.statuses(INJECTOR_STATUS, mark):
-            if reading.values.get('execution') == str(report.execution):
-                drill = reading.values.get('drill', drill)
+        drill = self.drills.get(str(report.execution), '')
         sim = arm.values if arm is not None and arm.values.get('resets') == resets else {}
         collisions, contacts = int(sim.get('collisions', '0')), int(sim.get('contacts', '0'))
         ok, why = _judge(report, sim, collisions, contacts)

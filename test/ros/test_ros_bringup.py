@@ -4,12 +4,16 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
 from ros_support import FIG3A, wait_for
 from spatial_scenes import panda_scene
 
-from ftplan_ros.bringup import RunReport, summarize
+from ftplan_msgs_py import create_diagnostic_array, create_diagnostic_status
+from ftplan_ros.bringup import INJECTOR_STATUS, Director, RunReport, summarize
 from ftplan_ros.core import load_scene
-from ftplan_ros.plan_client import Outcome, PlannedMotion
+from ftplan_ros.nodes.topics import DIAGNOSTICS
+from ftplan_ros.plan_client import Outcome, PlanClient, PlannedMotion
 from ftplan_ros.recording.bag_reader import open_bag
 
 # The console script users run (pip -e puts it beside the interpreter).
@@ -183,3 +187,31 @@ def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(proce
         assert 'standstill after a lock at most -' not in physics  # each lock was timed
         clearance, deviation = braking_figures(out, locks=len(drills))
         assert 0.0 < clearance < 1.0 and 0.0 <= deviation < 0.1
+
+
+def test_the_drill_of_a_long_run_is_kept_when_its_statuses_overflow_the_clients_log(
+        ros_context):
+    """A 50 s run on crowded_sheets_100 (an executor status at 10 Hz) pushed the injector's
+    'armed' status out of the client's 500 kept statuses: the run read 'NOT DRILLED: the
+    injector armed no drill' although its joint locked as drilled."""
+    client = PlanClient(context=ros_context)
+    director = Director(client, load_scene(FIG3A))
+    talker = Node('ftplan_test_statuses', context=ros_context)
+    try:
+        publisher = talker.create_publisher(DiagnosticArray, DIAGNOSTICS, 50)
+        wait_for(lambda: publisher.get_subscription_count() >= 2)  # the client's, the director's
+
+        def send(name, values, count=1):
+            for _ in range(count):
+                publisher.publish(create_diagnostic_array(
+                    [create_diagnostic_status(name, 'OK', 'status', values)]))
+
+        send(INJECTOR_STATUS, {'execution': 7, 'drill': 'joint2@0.5'})
+        for _ in range(30):                        # 600 executor statuses, 20 at a time
+            send('ftplan_executor: execution', {'execution': 7, 'state': 'nominal'}, 20)
+            client.spin_until(lambda: False, 0.05)
+        assert client.spin_until(lambda: director.drills == {'7': 'joint2@0.5'}, 2.0)
+        assert client.statuses(INJECTOR_STATUS) == []   # gone from the client's log
+    finally:
+        talker.destroy_node()
+        client.destroy_node()
