@@ -364,7 +364,8 @@ class SimNode(Node):
                                 lambda why, _: self.diagnostics.rejected('input', why))
         if found is not None:
             event, joint, stamp_ns = found
-            self._lock_taken(self.arm.lock(joint, event.angle, stamp_ns))
+            self._lock_taken(self.arm.lock(joint, event.angle, stamp_ns,
+                                           self.get_clock().now().nanoseconds))
 
     def _lock_taken(self, outcome: LockOutcome | None) -> None:
         """Log and report what came of a lock event; check the sweep of a lock at an angle."""

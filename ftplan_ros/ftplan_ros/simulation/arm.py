@@ -120,10 +120,12 @@ class Arm(Protocol):
     def stop(self) -> None:
         """Stop where the arm is."""
 
-    def lock(self, joint: int, angle: float | None, stamp_ns: int) -> LockOutcome | None:
+    def lock(self, joint: int, angle: float | None, stamp_ns: int, now_ns: int = 0,
+             ) -> LockOutcome | None:
         """Lock `joint` (at `angle`, None: where it is) at ROS time `stamp_ns` (0: now).
 
-        None when the joint is locked, or scheduled to lock, already.
+        `now_ns` is the ROS time now (0: unknown). None when the joint is locked, or
+        scheduled to lock, already.
         """
 
     def step(self, dt: float) -> Step:

@@ -95,8 +95,9 @@ class KinematicArm:
         self.time = 0.0
         self.motion: Motion | None = None
         self.locked: dict[int, float] = {}
-        # Scheduled failures: (joint, angle, stamp [ns]), each waiting for its moment.
-        self._scheduled: list[tuple[int, float | None, int]] = []
+        # Scheduled failures: (joint, angle, stamp [ns], the arm's time [s] it is due at
+        # while no command is under way), each waiting for its moment.
+        self._scheduled: list[tuple[int, float | None, int, float]] = []
 
     @property
     def moving(self) -> bool:
@@ -130,20 +131,30 @@ class KinematicArm:
         return Following(tuple(held), slowdown)
 
     def stop(self) -> None:
-        """Stop where the arm is."""
+        """Stop where the arm is; a lock scheduled on the command is due at once."""
         self.motion = None
+        self._scheduled = [(joint, angle, stamp_ns, self.time)
+                           for joint, angle, stamp_ns, _ in self._scheduled]
 
-    def lock(self, joint: int, angle: float | None, stamp_ns: int) -> LockOutcome | None:
+    def lock(self, joint: int, angle: float | None, stamp_ns: int, now_ns: int = 0,
+             ) -> LockOutcome | None:
         """Lock `joint` (at `angle` [rad], None: where it is) now, or at ROS time `stamp_ns`.
 
         A stamp ahead of where the arm is on its command schedules the lock for that
-        moment (`step` takes it); None when the joint is locked or scheduled already.
+        moment (`step` takes it). So does a stamp ahead of the ROS time `now_ns` [ns] (0:
+        unknown) while no command is under way: a drill's lock, stamped on the command it
+        belongs to, may come before that command. None when the joint is locked or
+        scheduled already.
         """
-        if joint in self.locked or any(joint == j for j, _, _ in self._scheduled):
+        if joint in self.locked or any(joint == j for j, _, _, _ in self._scheduled):
             return None
-        if stamp_ns and self.motion is not None and self.motion.time_of(stamp_ns) > self.time:
-            self._scheduled.append((joint, angle, stamp_ns))
-            return Scheduled(joint, self.motion.time_of(stamp_ns) - self.time)
+        if stamp_ns and self.motion is not None:
+            ahead = self.motion.time_of(stamp_ns) - self.time
+        else:
+            ahead = (stamp_ns - now_ns) * 1e-9 if stamp_ns and now_ns else 0.0
+        if ahead > 0.0:
+            self._scheduled.append((joint, angle, stamp_ns, self.time + ahead))
+            return Scheduled(joint, ahead)
         return self._lock(joint, angle, self._velocity(self.time))
 
     def _velocity(self, now: float) -> np.ndarray:
@@ -212,17 +223,18 @@ class KinematicArm:
         """Take the scheduled locks due by time `now` [s]; return when the first is due.
 
         The arm moves until that moment (within the step from `before`) and locks there,
-        exactly where its command puts it then. Without a command every lock is due.
+        exactly where its command puts it then; without a command, at the moment it was
+        scheduled for.
         """
-        moments = [self.motion.time_of(stamp_ns) if self.motion is not None else before
-                   for _, _, stamp_ns in self._scheduled]
+        moments = [self.motion.time_of(stamp_ns) if self.motion is not None else moment
+                   for _, _, stamp_ns, moment in self._scheduled]
         due = [lock for lock, moment in zip(self._scheduled, moments, strict=True)
                if moment <= now]
         if not due:
             return now, []
         self._scheduled = [lock for lock in self._scheduled if lock not in due]
         first = max(before, min(moment for moment in moments if moment <= now))
-        return first, [(joint, angle) for joint, angle, _ in due]
+        return first, [(joint, angle) for joint, angle, _, _ in due]
 
     def reset(self, q: np.ndarray) -> None:
         """Stand at q (n,), every joint free, nothing commanded or scheduled."""

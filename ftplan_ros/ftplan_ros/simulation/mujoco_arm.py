@@ -83,11 +83,12 @@ class MujocoArm:
             self.reference.stop()
             self.reference.q = self.q
 
-    def lock(self, joint: int, angle: float | None, stamp_ns: int) -> LockOutcome | None:
+    def lock(self, joint: int, angle: float | None, stamp_ns: int, now_ns: int = 0,
+             ) -> LockOutcome | None:
         """Brake `joint` now, or schedule it for ROS time `stamp_ns` (see KinematicArm.lock)."""
         if not self.reference.moving:
             self.reference.q = self.q
-        return self._braked(self.reference.lock(joint, angle, stamp_ns))
+        return self._braked(self.reference.lock(joint, angle, stamp_ns, now_ns))
 
     def _braked(self, outcome: LockOutcome | None) -> LockOutcome | None:
         """Engage the brake of a joint the reference locked, where the joint is."""

@@ -128,6 +128,22 @@ def test_a_lock_scheduled_on_a_command_that_started_late_lands_late_with_it():
     assert np.allclose(step.swept[-1], [0.5, 0.0, 0.0], atol=1e-12, rtol=0)
 
 
+def test_a_lock_stamped_on_a_command_that_comes_after_it_lands_on_that_command():
+    """A drill's lock, stamped 0.5 s into the nominal command, reached the sim before the
+    command did, while the arm stood at θ_s: it locked the joint at once, at θ_s, and the
+    command then moved the locked joint (a tracking error, a stall or a collision)."""
+    sim = arm()
+    outcome = sim.lock(0, None, at(0.55), NOW)
+    assert outcome == Scheduled(0, pytest.approx(0.55)) and sim.locked == {}
+    run(sim, 0.02)
+    sim.follow(np.array([[1.0, 0.0, 0.0]]), np.array([1.0]), at(0.05), at(0.02))
+    run(sim, 0.5)
+    assert sim.locked == {}
+    [step] = [step for step in run(sim, 0.1) if step.locks]
+    assert sim.locked == {0: pytest.approx(0.5)}
+    assert isinstance(arm().lock(0, None, at(0.55)), Locked)  # without the ROS time: at once
+
+
 def test_a_scheduled_lock_takes_effect_at_once_when_the_command_is_stopped():
     sim = arm()
     sim.follow(np.array([[1.0, 0.0, 0.0]]), np.array([1.0]), NOW, NOW)
