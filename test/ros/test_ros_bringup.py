@@ -6,15 +6,26 @@ from pathlib import Path
 import numpy as np
 from ros_support import FIG3A, wait_for
 from spatial_scenes import panda_scene
+from trajectory_checks import (
+    KINDS,
+    commands,
+    listen_to_trajectories,
+    nominal_paths,
+    replay_commands,
+)
 
 from ftplan_ros.bringup import RunReport, summarize
 from ftplan_ros.core import load_scene
+from ftplan_ros.core.model.motion_limits import robot_motion_limits
+from ftplan_ros.execution.options import ExecutorOptions
+from ftplan_ros.nodes.topics import TRAJECTORY
 from ftplan_ros.plan_client import Outcome, PlannedMotion
 from ftplan_ros.recording.bag_reader import open_bag
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
 DETOUR = Path(__file__).parent / 'scenes' / 'detour.yaml'
+SPEED = 2.0  # [rad/s] the bringup's --speed: the executor's max_joint_speed
 
 
 def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tmp_path):
@@ -156,15 +167,27 @@ def test_drills_from_the_sims_default_start_work_when_theta_s_is_on_another_arc(
     assert '2/2 runs reached the goal without collision' in out
 
 
-def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(processes):
-    """--sim mujoco: 2 drills on fig3a and 1 on the Panda shelf, through the real nodes."""
+def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(processes, ros):
+    """--sim mujoco: 2 drills on fig3a and 1 on the Panda shelf, through the real nodes.
+
+    Issue 36: every command the executor published, as a subscriber on the bringup's ROS
+    domain received it, replays within the limits the executor times them by."""
     shelf = FIG3A.parent / 'panda_shelf.yaml'
+    listen_to_trajectories(ros.probe)
+    counts = {}
     for scene, drills in ((FIG3A, ['joint2@0.4', 'joint1@0.6']), (shelf, ['panda_joint2@0.5'])):
+        robot = load_scene(scene).robot
+        sent, planned = len(commands(ros.probe)), len(ros.probe.received(TRAJECTORY))
         arguments = [part for drill in drills for part in ('--drill', drill)]
-        code, out, err = processes(BRINGUP + ['--scene', scene, '--sim', 'mujoco', *arguments]
-                                   ).wait(timeout=300)
+        code, out, err = processes(BRINGUP + ['--scene', scene, '--sim', 'mujoco', '--speed',
+                                              str(SPEED), *arguments]).wait(timeout=300)
         assert code == 0, out + err
         assert f'{len(drills)}/{len(drills)} runs reached the goal without collision' in out
         physics = next(line for line in out.splitlines() if line.startswith('physics: '))
         assert physics.startswith('physics: 0 MuJoCo contacts, largest tracking error ')
         assert 'standstill after a lock at most -' not in physics  # each lock was timed
+        [nominal] = nominal_paths(ros.probe, robot.joint_names, since=planned)
+        limits = ExecutorOptions(max_joint_speed=SPEED).commanded(robot_motion_limits(robot))
+        counts[scene.stem] = replay_commands(commands(ros.probe)[sent:], robot, nominal, limits)
+    assert counts == {scene: {kind: runs for kind in KINDS} for scene, runs in (
+        ('fig3a', 2), ('panda_shelf', 1))}, counts

@@ -115,10 +115,7 @@ class Executor:
 
     def commanded_limits(self) -> MotionLimits:
         """Return the limits commands are timed within: the robot's, scaled, speed capped."""
-        options = self.options
-        scaled = self.motion_limits.scaled(options.max_velocity_scaling_factor,
-                                           options.max_acceleration_scaling_factor)
-        return replace(scaled, velocity=np.minimum(scaled.velocity, options.max_joint_speed))
+        return self.options.commanded(self.motion_limits)
 
     def hold(self, plan: HeldPlan, now: Moment) -> list[Action]:
         """Hold `plan` for the next run."""

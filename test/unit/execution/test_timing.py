@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
+from trajectory_replay import limit_violations
 
 from ftplan_ros.core.model.motion_limits import MotionLimits, default_motion_limits
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.core.planning.timing import TimedPath, braking_speed_scaling, time_within_limits
 
-from .replay import limit_violations
 from .rig import commands
 
 PANDA_LIKE = MotionLimits([2.0, 1.0, 3.0], [15.0, 7.5, 10.0], [7500.0, 3750.0, 5000.0])

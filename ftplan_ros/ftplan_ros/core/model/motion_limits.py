@@ -75,6 +75,10 @@ class MotionLimits:
                             self.acceleration * acceleration_scaling,
                             self.jerk * acceleration_scaling)
 
+    def capped(self, max_velocity: float) -> MotionLimits:
+        """Return the limits with every joint's velocity at most `max_velocity` [rad/s]."""
+        return MotionLimits(np.minimum(self.velocity, max_velocity), self.acceleration, self.jerk)
+
 
 def check_scaling_factor(value: Any, where: str) -> float:
     """Return a scaling factor in (0, 1]; else InputError naming `where`."""
