@@ -12,6 +12,7 @@ from trajectory_checks import (
     listen_to_trajectories,
     nominal_paths,
     replay_commands,
+    replay_plans,
 )
 
 from ftplan_ros.bringup import RunReport, summarize
@@ -189,5 +190,8 @@ def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(proce
         [nominal] = nominal_paths(ros.probe, robot.joint_names, since=planned)
         limits = ExecutorOptions(max_joint_speed=SPEED).commanded(robot_motion_limits(robot))
         counts[scene.stem] = replay_commands(commands(ros.probe)[sent:], robot, nominal, limits)
-    assert counts == {scene: {kind: runs for kind in KINDS} for scene, runs in (
+        counts[scene.stem] += replay_plans(ros.probe, robot, robot_motion_limits(robot).capped(
+            SPEED), since=planned)
+    assert counts == {scene: {kind: runs for kind in KINDS} | {
+        'planned trajectory': 1, 'planned approach': 1} for scene, runs in (
         ('fig3a', 2), ('panda_shelf', 1))}, counts

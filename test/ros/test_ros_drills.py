@@ -9,10 +9,11 @@ import itertools
 
 import pytest
 from ros_support import FIG3A, SCENES, Probe
-from trajectory_checks import commands, listen_to_trajectories, replay_commands
+from trajectory_checks import commands, listen_to_trajectories, replay_commands, replay_plans
 
 from ftplan_ros.bringup import Director, Suite
 from ftplan_ros.core import load_scene
+from ftplan_ros.core.model.motion_limits import robot_motion_limits
 from ftplan_ros.nodes.injector import DRILL_TOLERANCE, parse_drill
 from ftplan_ros.plan_client import PlanClient
 
@@ -98,3 +99,7 @@ def test_fraction_drills_on_a_fast_path_land_where_they_were_asked(ros_context, 
     # approaches θ_s before every run (it ends the one before at the goal).
     assert counts == {'approach': len(drills), 'nominal': len(drills), 'stop': len(drills),
                       'recovery': len(drills)}, counts
+    # The plan's latched trajectory and approach: the planner's max_joint_speed is `speed`.
+    robot = director.scene.robot
+    assert replay_plans(probe, robot, robot_motion_limits(robot).capped(speed)) == \
+        {'planned trajectory': 1, 'planned approach': 1}

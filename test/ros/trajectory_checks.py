@@ -4,7 +4,9 @@
 message of the executor's /ftplan/joint_command; `replay_commands` sorts them by kind
 (the approach ends at θ_s, the nominal command lies on the planned nominal path, a
 recovery is any other motion, a stop has no points) and replays each with the shared
-checker (test/trajectory_replay.py).
+checker (test/trajectory_replay.py). `replay_plans` replays the planner's latched
+nominal trajectories and approaches (/ftplan/plan/trajectory, /ftplan/plan/approach):
+the planned paths' vertices, timed within the robot's limits and `max_joint_speed`.
 """
 
 from collections import Counter
@@ -79,3 +81,25 @@ def replay_commands(messages, robot, nominal: np.ndarray, limits: MotionLimits) 
     assert not failures, failures
     return counts
 
+
+def replay_plans(probe, robot, limits: MotionLimits, since: int = 0) -> Counter:
+    """Replay the planner's latched trajectories and approaches `probe` received (from the
+    `since`-th of each) to `robot` within `limits`; count each kind ('planned trajectory',
+    'planned approach').
+
+    Each must pass trajectory_violations from rest to rest, its steps unbounded (they
+    are the planned vertices); an approach without points (none) is not counted.
+    Raises AssertionError naming every message that fails.
+    """
+    counts, failures = Counter(), []
+    for kind, topic in (('planned trajectory', TRAJECTORY), ('planned approach', APPROACH)):
+        for i, msg in enumerate(probe.received(topic)[since:]):
+            if not msg.points:
+                continue
+            counts[kind] += 1
+            problems = trajectory_violations(msg, robot.joint_names, limits,
+                                             position_limits=robot.limits, max_step=None)
+            if problems:
+                failures.append(f'{kind} {since + i}: {problems}')
+    assert not failures, failures
+    return counts

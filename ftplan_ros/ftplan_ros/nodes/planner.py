@@ -19,9 +19,10 @@ The response Path holds the tool poses along the nominal motion (orientations to
 spatial arms); an empty Path means there is no failure-tolerant plan, and the reason is
 logged and reported on /diagnostics. A plan found is also published, latched, right
 after the response on /ftplan/plan/start_configuration (θ_s, stamped like the Path),
-/ftplan/plan/trajectory (the nominal joint path, timed by `max_joint_speed`, stamped
-likewise), /ftplan/plan/failure_surface (S_F) and /ftplan/plan/approach, and 50 ms later
-on /ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does).
+/ftplan/plan/trajectory (the nominal joint path timed within the robot's motion
+limits: plan_results.py; stamped likewise), /ftplan/plan/failure_surface (S_F) and
+/ftplan/plan/approach, and 50 ms later on /ftplan/plan/markers for RViz; match them to
+a response by stamp (PlanClient does).
 Its robot (a digest of the model), obstacle set (a digest), task, tolerances, tolerated
 joints and approach are values of the 'ftplan_planner: plan' status (plan_info.py), which
 also goes out latched, stamped like the plan, on /ftplan/plan/info. A failed request
@@ -148,7 +149,8 @@ class PlannerNode(Node):
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,
-                'Fastest joint speed [rad/s] used to time /ftplan/plan/trajectory.')
+                'Cap [rad/s] on every joint\'s speed in /ftplan/plan/trajectory and '
+                '/ftplan/plan/approach, below the robot\'s velocity limits.')
         declare(self, 'margin', 0.0,
                 'Clearance [m] the guarantee keeps from every obstacle.')
         declare(self, 'seed', 0,
