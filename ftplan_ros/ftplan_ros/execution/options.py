@@ -40,10 +40,14 @@ class ExecutorOptions:
     approach_time: float = 1.0        # budget of each RRT-Connect attempt of an approach
     nominal_lead: float = 0.05        # from sending the nominal path's command to its stamp
 
+    def scaled(self, limits: MotionLimits) -> MotionLimits:
+        """Return the robot's `limits` times the scaling factors (what a plan is timed for)."""
+        return limits.scaled(self.max_velocity_scaling_factor,
+                             self.max_acceleration_scaling_factor)
+
     def commanded(self, limits: MotionLimits) -> MotionLimits:
         """Return the robot's `limits` as commands use them: scaled, speed capped."""
-        return limits.scaled(self.max_velocity_scaling_factor,
-                             self.max_acceleration_scaling_factor).capped(self.max_joint_speed)
+        return self.scaled(limits).capped(self.max_joint_speed)
 
 
 @dataclass(frozen=True)

@@ -10,10 +10,11 @@ the biggest message: building it before the response would delay it). Plans answ
 side by side go out in the order they were answered.
 
 Both trajectories are timed as the executor times its commands (core/planning/timing.py:
-TOPP-RA within the robot's motion limits, velocities capped by `max_joint_speed`), and
+TOPP-RA within the plan's motion limits, the robot's or joint_limits_file's, scaled:
+motion_limit_parameters.py; velocities capped by `max_joint_speed`), and
 the nominal one slowed to the plan's stats['max_safe_speed'] as the executor slows its
 command: the fraction of the time-optimal speed at which a lock anywhere on the path
-brakes inside certified boxes. The planner finds it at the robot's full limits; a speed
+brakes inside certified boxes. The planner finds it within the plan's limits; a speed
 cap only lowers the path speed everywhere, so the braking stays certified. Their points
 are the planned paths' vertices (the trajectory is one path of S_F, which the executor
 and PlanClient find by its numbers), with the positions, velocities, accelerations and
@@ -44,7 +45,7 @@ from ftplan_msgs_py import (
     create_joint_trajectory,
 )
 from ftplan_ros.core import PlanResult, Scene
-from ftplan_ros.core.model.motion_limits import MotionLimits, robot_motion_limits
+from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach
 from ftplan_ros.core.planning.timing import at_speed, at_vertices, time_within_limits
 
@@ -93,10 +94,13 @@ class PlanResults:
                                                callback_group=group, autostart=False)
 
     def publish(self, scene: Scene, result: PlanResult, approach: Approach | None, stamp,
-                values: dict) -> None:
-        """Queue a plan's results (its status `values`): they go out after its response."""
+                values: dict, limits: MotionLimits) -> None:
+        """Queue a plan's results (its status `values`): they go out after its response.
+
+        Its trajectories are timed within motion `limits` (capped by max_joint_speed).
+        """
         with self._lock:
-            self._pending.append((scene, result, approach, stamp, values))
+            self._pending.append((scene, result, approach, stamp, values, limits))
         self.results_timer.reset()
 
     def results_callback(self) -> None:
@@ -109,7 +113,7 @@ class PlanResults:
             self._publish_results(*plan_results)
 
     def _publish_results(self, scene: Scene, result: PlanResult, approach: Approach | None,
-                         stamp, values: dict) -> None:
+                         stamp, values: dict, limits: MotionLimits) -> None:
         """Publish θ_s, the nominal trajectory and S_F of a plan, latched; report it."""
         values.update(theta_s=format_vector(result.theta_s),
                       waypoints=len(result.nominal_path),
@@ -119,7 +123,7 @@ class PlanResults:
                    f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
                    f'{values["approach"]}')
         try:
-            self._publish_topics(scene, result, approach, stamp, message, values)
+            self._publish_topics(scene, result, approach, stamp, message, values, limits)
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             if not self._node.context.ok():  # Ctrl-C came while publishing: nobody to tell
                 return
@@ -133,7 +137,7 @@ class PlanResults:
         self.markers_timer.reset()
 
     def _publish_topics(self, scene: Scene, result: PlanResult, approach: Approach | None,
-                        stamp, message: str, values: dict) -> None:
+                        stamp, message: str, values: dict, limits: MotionLimits) -> None:
         names = list(scene.robot.joint_names)
         nominal = result.nominal_path
         speed = float(self._node.get_parameter('max_joint_speed').value)
@@ -143,7 +147,7 @@ class PlanResults:
         self.surface_publisher.publish(create_failure_surface(result.surface.paths))
         moves = approach.path if approach is not None and approach.ok else \
             np.zeros((0, len(names)))
-        limits = robot_motion_limits(scene.robot).capped(speed)
+        limits = limits.capped(speed)
         self.approach_publisher.publish(_timed_trajectory(names, moves, limits, 1.0, stamp))
         # No speed certified: the executor refuses to run the plan; this shows its timing.
         braking = result.stats['max_safe_speed'] or 1.0
