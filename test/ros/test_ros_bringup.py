@@ -192,6 +192,10 @@ def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(proce
         counts[scene.stem] = replay_commands(commands(ros.probe)[sent:], robot, nominal, limits)
         counts[scene.stem] += replay_plans(ros.probe, robot, robot_motion_limits(robot).capped(
             SPEED), since=planned)
-    assert counts == {scene: {kind: runs for kind in KINDS} | {
-        'planned trajectory': 1, 'planned approach': 1} for scene, runs in (
-        ('fig3a', 2), ('panda_shelf', 1))}, counts
+    # Each bringup is a new process: its first approach may go out before this process has
+    # discovered its executor (the topic is volatile), as on a loaded machine it did.
+    for scene, runs in (('fig3a', 2), ('panda_shelf', 1)):
+        approaches = counts[scene].pop('approach', 0)
+        assert runs - 1 <= approaches <= runs, counts
+        assert counts[scene] == {kind: runs for kind in KINDS if kind != 'approach'} | {
+            'planned trajectory': 1, 'planned approach': 1}, counts

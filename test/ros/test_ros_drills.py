@@ -15,6 +15,7 @@ from ftplan_ros.bringup import Director, Suite
 from ftplan_ros.core import load_scene
 from ftplan_ros.core.model.motion_limits import robot_motion_limits
 from ftplan_ros.nodes.injector import DRILL_TOLERANCE, parse_drill
+from ftplan_ros.nodes.spinning import BackgroundSpin
 from ftplan_ros.plan_client import PlanClient
 
 JOINTS = ('joint1', 'joint2', 'joint3')
@@ -78,7 +79,9 @@ def test_fraction_drills_on_a_fast_path_land_where_they_were_asked(ros_context, 
     paths, stops, recoveries), as a subscriber received it, replays within the limits the
     executor times them by."""
     suite = Suite(scene, speed=speed, rate=100.0, drills=drills, context=ros_context)
-    probe = suite.spin.add(Probe(ros_context))
+    # Its own thread: the recording must not take the nodes' executor from them.
+    probe = Probe(ros_context)
+    listening = BackgroundSpin([probe], context=ros_context, name='ftplan-probe')
     listen_to_trajectories(probe)
     client = PlanClient(context=ros_context)
     try:
@@ -89,6 +92,7 @@ def test_fraction_drills_on_a_fast_path_land_where_they_were_asked(ros_context, 
         limits = suite.executor_node.logic.commanded_limits()
     finally:
         client.destroy_node()
+        listening.stop()
         suite.shutdown()
     landed = {run.drill: run.lock_progress for run in runs}
     assert all(abs(landed.get(drill, float('nan')) - parse_drill(drill, None).fraction) <=
