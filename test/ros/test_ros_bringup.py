@@ -8,17 +8,28 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from ros_support import FIG3A, wait_for
 from spatial_scenes import panda_scene
+from trajectory_checks import (
+    KINDS,
+    commands,
+    listen_to_trajectories,
+    nominal_paths,
+    replay_commands,
+    replay_plans,
+)
 
 from ftplan_msgs_py import create_diagnostic_array, create_diagnostic_status
 from ftplan_ros.bringup import INJECTOR_STATUS, Director, RunReport, summarize
 from ftplan_ros.core import load_scene
-from ftplan_ros.nodes.topics import DIAGNOSTICS
+from ftplan_ros.core.model.motion_limits import robot_motion_limits
+from ftplan_ros.execution.options import ExecutorOptions
+from ftplan_ros.nodes.topics import DIAGNOSTICS, TRAJECTORY
 from ftplan_ros.plan_client import Outcome, PlanClient, PlannedMotion
 from ftplan_ros.recording.bag_reader import open_bag
 
 # The console script users run (pip -e puts it beside the interpreter).
 BRINGUP = [str(Path(sys.executable).parent / 'ftplan-bringup')]
 DETOUR = Path(__file__).parent / 'scenes' / 'detour.yaml'
+SPEED = 2.0  # [rad/s] the bringup's --speed: the executor's max_joint_speed
 
 
 def test_a_drill_through_the_bringup_reaches_the_goal_and_draws_it(processes, tmp_path):
@@ -173,13 +184,20 @@ def test_drills_from_the_sims_default_start_work_when_theta_s_is_on_another_arc(
     assert '2/2 runs reached the goal without collision' in out
 
 
-def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(processes):
-    """--sim mujoco: 2 drills on fig3a and 1 on the Panda shelf, through the real nodes."""
+def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(processes, ros):
+    """--sim mujoco: 2 drills on fig3a and 1 on the Panda shelf, through the real nodes.
+
+    Issue 36: every command the executor published, as a subscriber on the bringup's ROS
+    domain received it, replays within the limits the executor times them by."""
     shelf = FIG3A.parent / 'panda_shelf.yaml'
+    listen_to_trajectories(ros.probe)
+    counts = {}
     for scene, drills in ((FIG3A, ['joint2@0.4', 'joint1@0.6']), (shelf, ['panda_joint2@0.5'])):
+        robot = load_scene(scene).robot
+        sent, planned = len(commands(ros.probe)), len(ros.probe.received(TRAJECTORY))
         arguments = [part for drill in drills for part in ('--drill', drill)]
-        code, out, err = processes(BRINGUP + ['--scene', scene, '--sim', 'mujoco', *arguments]
-                                   ).wait(timeout=300)
+        code, out, err = processes(BRINGUP + ['--scene', scene, '--sim', 'mujoco', '--speed',
+                                              str(SPEED), *arguments]).wait(timeout=300)
         assert code == 0, out + err
         assert f'{len(drills)}/{len(drills)} runs reached the goal without collision' in out
         physics = next(line for line in out.splitlines() if line.startswith('physics: '))
@@ -187,6 +205,18 @@ def test_physics_drills_through_the_bringup_reach_the_goal_without_contact(proce
         assert 'standstill after a lock at most -' not in physics  # each lock was timed
         clearance, deviation = braking_figures(out, locks=len(drills))
         assert 0.0 < clearance < 1.0 and 0.0 <= deviation < 0.1
+        [nominal] = nominal_paths(ros.probe, robot.joint_names, since=planned)
+        limits = ExecutorOptions(max_joint_speed=SPEED).commanded(robot_motion_limits(robot))
+        counts[scene.stem] = replay_commands(commands(ros.probe)[sent:], robot, nominal, limits)
+        counts[scene.stem] += replay_plans(ros.probe, robot, robot_motion_limits(robot).capped(
+            SPEED), since=planned)
+    # Each bringup is a new process: its first approach may go out before this process has
+    # discovered its executor (the topic is volatile), as on a loaded machine it did.
+    for scene, runs in (('fig3a', 2), ('panda_shelf', 1)):
+        approaches = counts[scene].pop('approach', 0)
+        assert runs - 1 <= approaches <= runs, counts
+        assert counts[scene] == {kind: runs for kind in KINDS if kind != 'approach'} | {
+            'planned trajectory': 1, 'planned approach': 1}, counts
 
 
 def test_the_drill_of_a_long_run_is_kept_when_its_statuses_overflow_the_clients_log(

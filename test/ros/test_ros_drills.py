@@ -8,11 +8,14 @@ worker); it checks every run and reports all the runs that failed at once.
 import itertools
 
 import pytest
-from ros_support import FIG3A, SCENES
+from ros_support import FIG3A, SCENES, Probe
+from trajectory_checks import commands, listen_to_trajectories, replay_commands, replay_plans
 
 from ftplan_ros.bringup import Director, Suite
 from ftplan_ros.core import load_scene
+from ftplan_ros.core.model.motion_limits import robot_motion_limits
 from ftplan_ros.nodes.injector import DRILL_TOLERANCE, parse_drill
+from ftplan_ros.nodes.spinning import BackgroundSpin
 from ftplan_ros.plan_client import PlanClient
 
 JOINTS = ('joint1', 'joint2', 'joint3')
@@ -70,18 +73,37 @@ def test_fraction_drills_on_a_fast_path_land_where_they_were_asked(ros_context, 
     as the executor reports it. The injector used to lock when it saw the arm past the
     fraction on /joint_states (a tick of the sim late, 2-5 % of these paths) and the sim
     took the event one to fifteen ticks later still: panda_joint3@0.5 landed at 58.5 %,
-    and a lock asked at 95 % after the motion, at 100 %."""
+    and a lock asked at 95 % after the motion, at 100 %.
+
+    Issue 36: every command the executor published on the way (approaches, nominal
+    paths, stops, recoveries), as a subscriber received it, replays within the limits the
+    executor times them by."""
     suite = Suite(scene, speed=speed, rate=100.0, drills=drills, context=ros_context)
+    # Its own thread: the recording must not take the nodes' executor from them.
+    probe = Probe(ros_context)
+    listening = BackgroundSpin([probe], context=ros_context, name='ftplan-probe')
+    listen_to_trajectories(probe)
     client = PlanClient(context=ros_context)
     try:
         director = Director(client, load_scene(scene))
         motion = director.plan(timeout=120.0)
         assert motion.succeeded, motion.message
         runs = [director.run(k + 1, timeout=120.0, drilled=True) for k in range(len(drills))]
+        limits = suite.executor_node.logic.commanded_limits()
     finally:
         client.destroy_node()
+        listening.stop()
         suite.shutdown()
     landed = {run.drill: run.lock_progress for run in runs}
     assert all(abs(landed.get(drill, float('nan')) - parse_drill(drill, None).fraction) <=
                DRILL_TOLERANCE for drill in drills), landed
     assert [(run.ok, run.missed) for run in runs] == [(True, '')] * len(drills), runs
+    counts = replay_commands(commands(probe), director.scene.robot, motion.trajectory, limits)
+    # One nominal command, one stop (at the lock) and one recovery per run; the arm
+    # approaches θ_s before every run (it ends the one before at the goal).
+    assert counts == {'approach': len(drills), 'nominal': len(drills), 'stop': len(drills),
+                      'recovery': len(drills)}, counts
+    # The plan's latched trajectory and approach: the planner's max_joint_speed is `speed`.
+    robot = director.scene.robot
+    assert replay_plans(probe, robot, robot_motion_limits(robot).capped(speed)) == \
+        {'planned trajectory': 1, 'planned approach': 1}

@@ -4,12 +4,16 @@ import time
 
 import numpy as np
 import pytest
-from ros_support import wait_for
+import yaml
+from ros_support import FIG3A, wait_for
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import create_joint_state, create_locked_joint, read_joint_trajectory
+from ftplan_ros.core import load_scene
+from ftplan_ros.core.io.limits_file import load_joint_limits
+from ftplan_ros.core.model.motion_limits import motion_limits_digest, robot_motion_limits
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.nodes.executor import ExecutorNode
 from ftplan_ros.nodes.planner import PlannerNode
@@ -96,6 +100,34 @@ def test_execute_without_a_plan_or_while_busy_is_refused(slow_suite):
     assert 'locked_joint' not in done.values
     # Another execution from the goal: back to theta_s, then the same path again.
     assert state_of(ros, execute(ros), 'done')
+
+
+@pytest.mark.parametrize('planner, executor, scaling', [
+    ({'max_velocity_scaling_factor': 0.5}, {}, (0.5, 1.0)),
+    ({}, {'joint_limits_file': 'slow_joint2.yaml'}, (1.0, 1.0)),
+], ids=['planner scaled', 'executor joint_limits_file'])
+def test_a_plan_timed_within_other_motion_limits_is_refused_naming_both(ros, tmp_path, planner,
+                                                                        executor, scaling):
+    """Issue 36, item 3: the robot digest covers no motion limits; the executor ran a plan
+    the planner had timed at half the robot's velocities, or for the robot's limits while
+    the executor's joint_limits_file gave others."""
+    slow = {'joint_limits': {'joint2': {'has_velocity_limits': True, 'max_velocity': 0.5}}}
+    (tmp_path / 'slow_joint2.yaml').write_text(yaml.safe_dump(slow))
+    executor = {name: str(tmp_path / value) for name, value in executor.items()}
+    ros.make(PlannerNode, **planner)
+    ros.make(ExecutorNode, max_joint_speed=FAST, **executor)
+    ros.make(SimNode, max_joint_speed=4.0)
+    motion = plan(ros)
+    refused = ros.probe.call(Trigger, '/ftplan/execute', Trigger.Request())
+    robot = load_scene(FIG3A).robot
+    own = robot_motion_limits(robot)
+    planned = motion_limits_digest(own.scaled(*scaling))
+    ours = motion_limits_digest(own if not executor else
+                                load_joint_limits(tmp_path / 'slow_joint2.yaml',
+                                                  robot.joint_names, own))
+    assert not refused.success
+    assert f'plan {motion.stamp} was timed within motion limits {planned}, but the ' \
+        f'executor\'s are {ours} (joint_limits_file, ' in refused.message, refused.message
 
 
 def test_a_lock_of_an_unknown_joint_is_logged_and_ignored(suite):

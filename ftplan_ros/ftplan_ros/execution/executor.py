@@ -29,8 +29,9 @@ tolerated by this plan".
 Locked joints are remembered in one place (locks.py) whatever the executor is doing,
 idle included, until `reset`; no command that would move one is ever given, and a run
 is refused while one is locked. A run is also refused when the plan was made for
-another robot (their digests differ), when obstacle updates were lost, and when the
-current obstacles touch a vertex of the plan's S_F. Obstacles that arrive during a run
+another robot (their digests differ) or timed within other motion limits (the robot's
+or joint_limits_file's, scaled: their digests differ), when obstacle updates were lost,
+and when the current obstacles touch a vertex of the plan's S_F. Obstacles that arrive during a run
 are checked against the rest of the commanded motion (certified) and against S_F: on
 the approach the arm stops and a new approach is planned from where it stands; on the
 nominal or recovery path it stops there and the run fails. Lost obstacle updates, a
@@ -45,7 +46,11 @@ from dataclasses import replace
 import numpy as np
 
 from ftplan_ros.core import Robot
-from ftplan_ros.core.model.motion_limits import MotionLimits, robot_motion_limits
+from ftplan_ros.core.model.motion_limits import (
+    MotionLimits,
+    motion_limits_digest,
+    robot_motion_limits,
+)
 from ftplan_ros.core.model.robot import robot_digest
 
 from .actions import Action, Answer, Moment, Rejected, Status
@@ -115,10 +120,7 @@ class Executor:
 
     def commanded_limits(self) -> MotionLimits:
         """Return the limits commands are timed within: the robot's, scaled, speed capped."""
-        options = self.options
-        scaled = self.motion_limits.scaled(options.max_velocity_scaling_factor,
-                                           options.max_acceleration_scaling_factor)
-        return replace(scaled, velocity=np.minimum(scaled.velocity, options.max_joint_speed))
+        return self.options.commanded(self.motion_limits)
 
     def hold(self, plan: HeldPlan, now: Moment) -> list[Action]:
         """Hold `plan` for the next run."""
@@ -168,6 +170,12 @@ class Executor:
         if self.plan.robot_digest != digest:
             return (f'plan {self.plan.key} was made for robot {self.plan.robot_digest}, but the '
                     f'robot is now {digest} (from {self.interfaces.robot_source}): plan again')
+        limits = motion_limits_digest(self.options.scaled(self.motion_limits))
+        if self.plan.motion_limits_digest != limits:
+            return (f'plan {self.plan.key} was timed within motion limits '
+                    f'{self.plan.motion_limits_digest}, but the executor\'s are {limits} '
+                    '(joint_limits_file, max_velocity_scaling_factor, '
+                    'max_acceleration_scaling_factor): give the planner the same, plan again')
         if surface_meets_obstacle(self.obstacles, self.plan.surface):
             return (f'the obstacles changed since plan {self.plan.key}: its failure surface now '
                     'meets one; plan again')

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from ftplan_ros.core import CollisionChecker
+from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.timing import DEFAULT_MAX_STEP
 
 from .locks import DEFAULT_LOCK_ANGLE_TOLERANCE
@@ -38,6 +39,15 @@ class ExecutorOptions:
     lock_angle_tolerance: float = DEFAULT_LOCK_ANGLE_TOLERANCE  # a lock's angle from the joint's
     approach_time: float = 1.0        # budget of each RRT-Connect attempt of an approach
     nominal_lead: float = 0.05        # from sending the nominal path's command to its stamp
+
+    def scaled(self, limits: MotionLimits) -> MotionLimits:
+        """Return the robot's `limits` times the scaling factors (what a plan is timed for)."""
+        return limits.scaled(self.max_velocity_scaling_factor,
+                             self.max_acceleration_scaling_factor)
+
+    def commanded(self, limits: MotionLimits) -> MotionLimits:
+        """Return the robot's `limits` as commands use them: scaled, speed capped."""
+        return self.scaled(limits).capped(self.max_joint_speed)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from ftplan_ros.core.collision.braking import lock_point, segment_speeds
 from ftplan_ros.core.model.angles import configuration_difference, whole_turns
 from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
-from ftplan_ros.core.planning.timing import braking_speed_scaling, slowed, time_within_limits
+from ftplan_ros.core.planning.timing import at_speed, braking_speed_scaling, time_within_limits
 
 from .actions import Action, Moment, Stop
 from .command import Command
@@ -212,7 +212,7 @@ class Run:
             self.fail('no speed of the nominal path is certified to brake clear of the '
                       'obstacles after a lock: stopped; plan again (with a margin)', now)
             return 0.0
-        timed = slowed(timed, 1.0 / speed) if speed < 1.0 else timed
+        timed = at_speed(timed, speed)
         ex.command = Command(timed.positions, timed.times, now.ros_ns + round(lead * 1e9),
                              timed.velocities, timed.accelerations)
         ex.commanded = now.monotonic

@@ -41,6 +41,7 @@ class HeldPlan:
     goal: np.ndarray                # the task point the plan reaches
     tolerated: tuple[str, ...]      # the joints whose lock it survives
     robot_digest: str               # of the robot it was planned for (core robot_digest)
+    motion_limits_digest: str       # of the (scaled) limits it was timed within
 
 
 @dataclass(frozen=True)

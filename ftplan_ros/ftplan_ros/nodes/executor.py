@@ -51,11 +51,6 @@ from trajectory_msgs.msg import JointTrajectory
 
 from ftplan_msgs_py import create_joint_trajectory, read_joint_trajectory
 from ftplan_ros.core import InputError, Robot, Scene, load_kernels
-from ftplan_ros.core.io.limits_file import load_joint_limits
-from ftplan_ros.core.model.motion_limits import (
-    MotionLimits,
-    robot_motion_limits,
-)
 from ftplan_ros.execution.actions import Action, Answer, Moment, Rejected, Status, Stop
 from ftplan_ros.execution.command import Command
 from ftplan_ros.execution.executor import Executor
@@ -64,6 +59,7 @@ from ftplan_ros.execution.state import HeldPlan, State
 
 from .inputs import read_arm_state
 from .lock_events import read_lock_event
+from .motion_limit_parameters import declare_motion_limit_parameters, file_motion_limits
 from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
 from .params import (
     add_validators,
@@ -133,18 +129,8 @@ class ExecutorNode(Node):
         declare(self, 'max_joint_speed', _DEFAULTS.max_joint_speed,
                 'Cap [rad/s] on every joint\'s speed in the commanded trajectories, below '
                 'the robot\'s velocity limits.')
-        declare(self, 'max_velocity_scaling_factor', _DEFAULTS.max_velocity_scaling_factor,
-                'Fraction (0, 1] of the robot\'s velocity limits the commands use (MoveIt\'s).')
-        declare(self, 'max_acceleration_scaling_factor',
-                _DEFAULTS.max_acceleration_scaling_factor,
-                'Fraction (0, 1] of the robot\'s acceleration (and jerk) limits the commands '
-                'use (MoveIt\'s).')
         declare(self, 'max_step', _DEFAULTS.max_step,
                 'Farthest [rad] any joint moves between two commanded points.')
-        declare(self, 'joint_limits_file', '',
-                'MoveIt joint_limits.yaml whose velocity, acceleration and jerk limits replace '
-                'the robot\'s (empty: the robot\'s own: URDF velocity, the robot file\'s '
-                'joint_limits, else the defaults).', read_only=True)
         declare(self, 'arrival_tolerance', _DEFAULTS.arrival_tolerance,
                 'Largest joint error [rad] at which a command counts as completed. The sim '
                 'lands exactly; raise it (with max_path_offset) for a real arm.')
@@ -185,8 +171,9 @@ class ExecutorNode(Node):
                 'idle).', read_only=True)
         validators = {field.name: positive for field in fields(ExecutorOptions)}
         validators['status_rate'] = positive
-        for name in ('max_velocity_scaling_factor', 'max_acceleration_scaling_factor'):
-            validators[name] = _scaling_factor
+        validators.update(declare_motion_limit_parameters(
+            self, _DEFAULTS.max_velocity_scaling_factor,
+            _DEFAULTS.max_acceleration_scaling_factor))
         validators['nominal_lead'] = lambda value: non_negative(value) or (
             None if value <= LONGEST_LEAD else f'must be at most {LONGEST_LEAD} s, got {value}')
         check_startup_parameters(self, validators)
@@ -196,14 +183,6 @@ class ExecutorNode(Node):
     def _options(self) -> ExecutorOptions:
         """Return the logic's options from the parameters of the same names."""
         return options_from_parameters(self, ExecutorOptions)
-
-    def _motion_limits(self, robot: Robot) -> MotionLimits | None:
-        """Return the limits of `joint_limits_file` for `robot` (None: none given)."""
-        path = self.get_parameter('joint_limits_file').value
-        if not path:
-            return None
-        return load_joint_limits(path, robot.joint_names, robot_motion_limits(robot),
-                                 'joint_limits_file')
 
     def _parameters_set(self, parameters: list[Parameter]) -> None:
         self.logic.options = self._options()
@@ -239,7 +218,7 @@ class ExecutorNode(Node):
 
         Raises InputError, with nothing changed, when joint_limits_file does not fit it.
         """
-        limits = self._motion_limits(scene.robot)
+        limits = file_motion_limits(self, scene.robot)
         self._perform(self.logic.use_robot(scene.robot, self._now(), limits))
         load_kernels(scene.robot)  # approaches along M_s trace with it
         problems = self._obstacles.rebase(scene)
@@ -431,7 +410,7 @@ def held_plan(latched: LatchedPlan, robot: Robot) -> HeldPlan:
     end = robot.forward_kinematics(latched.trajectory[-1])
     goal = info.goal if len(info.goal) == len(end) else end
     return HeldPlan(latched.key, latched.theta_s, latched.surface, robot, goal,
-                    info.tolerated_joints, info.robot)
+                    info.tolerated_joints, info.robot, info.motion_limits)
 
 
 def status_values(status: Status) -> dict[str, object]:
@@ -472,7 +451,3 @@ def main(args=None) -> int:
     """Run the executor node until Ctrl-C; exit code 2 for a bad scene or parameter."""
     return run_node(ExecutorNode, EXECUTOR_NODE, args)
 
-
-def _scaling_factor(value: float) -> str | None:
-    """Validate a scaling factor: in (0, 1]."""
-    return positive(value) or (None if value <= 1.0 else f'must be at most 1, got {value!r}')

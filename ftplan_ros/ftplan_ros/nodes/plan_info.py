@@ -14,11 +14,13 @@ nodes that join late:
 | `tolerance`, `orientation_tolerance` | [m], [rad] |
 | `tolerated_joints` | joint names, comma-separated (e.g. 'joint1,joint3') |
 | `robot` | a digest of the robot's model (core robot_digest): joints, limits, geometry |
+| `motion_limits` | a digest of the velocity, acceleration, jerk limits the plan is timed within |
 | `obstacles`, `obstacle_set` | how many obstacles, and a digest naming them (obstacles.py) |
 | `approach` | how the arm gets to θ_s from where it stood (core/planning/approach.py) |
 | `reach`, `reach_search` | the answer for the arm where it stands; how far it looked |
 
-The executor reads them from /ftplan/plan/info to tell a plan for another robot, to
+The executor reads them from /ftplan/plan/info to tell a plan for another robot (or
+timed within other motion limits: motion_limit_parameters.py), to
 judge arrival and to name an untolerated lock, and repeats `tolerated_joints` in its
 execution status, which the injector reads for random drills.
 """
@@ -32,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ftplan_ros.core import Obstacle, Robot, Task
+from ftplan_ros.core.model.motion_limits import MotionLimits, motion_limits_digest
 from ftplan_ros.core.model.robot import robot_digest
 
 from .obstacles import obstacle_set_key
@@ -57,6 +60,7 @@ class PlanInfo:
 
     stamp: str
     robot: str
+    motion_limits: str
     obstacle_set: str
     task_kind: str
     start: np.ndarray
@@ -77,10 +81,14 @@ def format_point(values) -> str:
     return '[' + ', '.join(repr(float(v)) for v in values) + ']'
 
 
-def plan_info_values(robot: Robot, obstacles: Sequence[Obstacle], task: Task,
-                     tolerated: Sequence[str]) -> dict[str, object]:
-    """Return the status values that describe a plan (the table above, bar stamp, approach)."""
-    return {'robot': robot_digest(robot), 'obstacles': len(obstacles),
+def plan_info_values(robot: Robot, limits: MotionLimits, obstacles: Sequence[Obstacle],
+                     task: Task, tolerated: Sequence[str]) -> dict[str, object]:
+    """Return the status values that describe a plan (the table above, bar stamp, approach).
+
+    `limits` are the motion limits its trajectories are timed within, scaled.
+    """
+    return {'robot': robot_digest(robot), 'motion_limits': motion_limits_digest(limits),
+            'obstacles': len(obstacles),
             'obstacle_set': obstacle_set_key(obstacles), 'task_kind': task.kind,
             'start': format_point(task.start), 'goal': format_point(task.goal),
             'tolerance': task.goal_tolerance,
@@ -94,7 +102,8 @@ def read_plan_info(values: Mapping[str, str]) -> PlanInfo | None:
     Every number must be finite, and the tolerances positive.
     """
     try:
-        info = PlanInfo(values['stamp'], values['robot'], values['obstacle_set'],
+        info = PlanInfo(values['stamp'], values['robot'], values['motion_limits'],
+                        values['obstacle_set'],
                         values['task_kind'],
                         np.array(parse_vector(values['start'])),
                         np.array(parse_vector(values['goal'])), float(values['tolerance']),

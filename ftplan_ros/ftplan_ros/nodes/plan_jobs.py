@@ -24,6 +24,7 @@ from ftplan_ros.core import (
     VerificationOptions,
     plan,
 )
+from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import ApproachOptions
 from ftplan_ros.core.planning.reachable import ReachablePlan, plan_from
 
@@ -41,6 +42,7 @@ class PlanSettings:
     approach: bool = True        # plan for the arm where it stands (plan_from)
     approach_time: float = 1.0   # [s] budget of each RRT-Connect attempt of an approach
     proof_cells: int = ApproachOptions().proof_cells  # finest grid of the out-of-reach proof
+    motion_limits: MotionLimits | None = None  # plans are timed within (None: the robot's)
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,7 +76,8 @@ def run_job(job: PlanJob, cache: ManifoldCache, stopped: Callable[[], bool] = la
             raise PlanTimeout(line)
 
     settings = job.settings
-    options = PlannerOptions(verification=VerificationOptions(margin=settings.margin))
+    options = PlannerOptions(verification=VerificationOptions(margin=settings.margin),
+                             motion_limits=settings.motion_limits)
     rng = np.random.default_rng(settings.seed)
     if job.q is None or not settings.approach:
         return plan(job.scene, options, rng, progress, cache=cache), None

@@ -3,11 +3,23 @@
 The planner answers a request first, then publishes what it found: right after the
 response (RESULTS_DELAY) its plan status on /ftplan/plan/info (plan_info.py), S_F on
 /ftplan/plan/failure_surface, the approach on /ftplan/plan/approach (no points: none),
-the nominal trajectory on /ftplan/plan/trajectory (timed by the planner's
-`max_joint_speed`) and θ_s on /ftplan/plan/start_configuration, all stamped like the
-plan, in that order; then it reports the plan on /diagnostics; MARKERS_DELAY later its
-RViz markers (plan_markers.py, the biggest message: building it before the response
-would delay it). Plans answered side by side go out in the order they were answered.
+the nominal trajectory on /ftplan/plan/trajectory and θ_s on
+/ftplan/plan/start_configuration, all stamped like the plan, in that order; then it
+reports the plan on /diagnostics; MARKERS_DELAY later its RViz markers (plan_markers.py,
+the biggest message: building it before the response would delay it). Plans answered
+side by side go out in the order they were answered.
+
+Both trajectories are timed as the executor times its commands (core/planning/timing.py:
+TOPP-RA within the plan's motion limits, the robot's or joint_limits_file's, scaled:
+motion_limit_parameters.py; velocities capped by `max_joint_speed`), and
+the nominal one slowed to the plan's stats['max_safe_speed'] as the executor slows its
+command: the fraction of the time-optimal speed at which a lock anywhere on the path
+brakes inside certified boxes. The planner finds it within the plan's limits; a speed
+cap only lowers the path speed everywhere, so the braking stays certified. Their points
+are the planned paths' vertices (the trajectory is one path of S_F, which the executor
+and PlanClient find by its numbers), with the positions, velocities, accelerations and
+times of the timing there: a record of the plan, not a command (the executor cuts its
+commands into small steps).
 """
 
 from __future__ import annotations
@@ -33,8 +45,9 @@ from ftplan_msgs_py import (
     create_joint_trajectory,
 )
 from ftplan_ros.core import PlanResult, Scene
+from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach
-from ftplan_ros.execution.motion import time_path
+from ftplan_ros.core.planning.timing import at_speed, at_vertices, time_within_limits
 
 from .plan_markers import plan_markers
 from .qos import LATCHED_QOS
@@ -81,10 +94,13 @@ class PlanResults:
                                                callback_group=group, autostart=False)
 
     def publish(self, scene: Scene, result: PlanResult, approach: Approach | None, stamp,
-                values: dict) -> None:
-        """Queue a plan's results (its status `values`): they go out after its response."""
+                values: dict, limits: MotionLimits) -> None:
+        """Queue a plan's results (its status `values`): they go out after its response.
+
+        Its trajectories are timed within motion `limits` (capped by max_joint_speed).
+        """
         with self._lock:
-            self._pending.append((scene, result, approach, stamp, values))
+            self._pending.append((scene, result, approach, stamp, values, limits))
         self.results_timer.reset()
 
     def results_callback(self) -> None:
@@ -97,7 +113,7 @@ class PlanResults:
             self._publish_results(*plan_results)
 
     def _publish_results(self, scene: Scene, result: PlanResult, approach: Approach | None,
-                         stamp, values: dict) -> None:
+                         stamp, values: dict, limits: MotionLimits) -> None:
         """Publish θ_s, the nominal trajectory and S_F of a plan, latched; report it."""
         values.update(theta_s=format_vector(result.theta_s),
                       waypoints=len(result.nominal_path),
@@ -107,7 +123,7 @@ class PlanResults:
                    f'{values["theta_s"]} rad, {len(result.nominal_path)} waypoints; approach: '
                    f'{values["approach"]}')
         try:
-            self._publish_topics(scene, result, approach, stamp, message, values)
+            self._publish_topics(scene, result, approach, stamp, message, values, limits)
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             if not self._node.context.ok():  # Ctrl-C came while publishing: nobody to tell
                 return
@@ -121,7 +137,7 @@ class PlanResults:
         self.markers_timer.reset()
 
     def _publish_topics(self, scene: Scene, result: PlanResult, approach: Approach | None,
-                        stamp, message: str, values: dict) -> None:
+                        stamp, message: str, values: dict, limits: MotionLimits) -> None:
         names = list(scene.robot.joint_names)
         nominal = result.nominal_path
         speed = float(self._node.get_parameter('max_joint_speed').value)
@@ -131,10 +147,12 @@ class PlanResults:
         self.surface_publisher.publish(create_failure_surface(result.surface.paths))
         moves = approach.path if approach is not None and approach.ok else \
             np.zeros((0, len(names)))
-        self.approach_publisher.publish(create_joint_trajectory(
-            names, moves, time_path(moves, speed) if len(moves) else [], stamp))
-        self.trajectory_publisher.publish(create_joint_trajectory(
-            names, nominal, time_path(nominal, speed), stamp))
+        limits = limits.capped(speed)
+        self.approach_publisher.publish(_timed_trajectory(names, moves, limits, 1.0, stamp))
+        # No speed certified: the executor refuses to run the plan; this shows its timing.
+        braking = result.stats['max_safe_speed'] or 1.0
+        self.trajectory_publisher.publish(_timed_trajectory(names, nominal, limits, braking,
+                                                            stamp))
         self.start_publisher.publish(create_joint_state(names, result.theta_s, stamp=stamp))
 
     def markers_callback(self) -> None:
@@ -153,3 +171,19 @@ class PlanResults:
                 return
             self._diagnostics.report('markers', 'ERROR', f'could not publish markers: '
                                      f'{error!r}', log=True)
+
+
+def _timed_trajectory(names: list[str], path: np.ndarray, limits: MotionLimits, speed: float,
+                      stamp) -> JointTrajectory:
+    """Return `path` (k, n) as a JointTrajectory at its vertices, timed within `limits`.
+
+    At `speed` (0, 1] of the time-optimal timing (timing.py at_speed).
+    No points for an empty path (no approach).
+    """
+    path = np.asarray(path, dtype=float)
+    if not len(path):
+        return create_joint_trajectory(names, path, [], stamp)
+    timed = at_vertices(at_speed(time_within_limits(path, limits), speed), path)
+    return create_joint_trajectory(names, timed.positions, timed.times, stamp,
+                                   velocities=timed.velocities,
+                                   accelerations=timed.accelerations)

@@ -19,9 +19,10 @@ The response Path holds the tool poses along the nominal motion (orientations to
 spatial arms); an empty Path means there is no failure-tolerant plan, and the reason is
 logged and reported on /diagnostics. A plan found is also published, latched, right
 after the response on /ftplan/plan/start_configuration (θ_s, stamped like the Path),
-/ftplan/plan/trajectory (the nominal joint path, timed by `max_joint_speed`, stamped
-likewise), /ftplan/plan/failure_surface (S_F) and /ftplan/plan/approach, and 50 ms later
-on /ftplan/plan/markers for RViz; match them to a response by stamp (PlanClient does).
+/ftplan/plan/trajectory (the nominal joint path timed within the robot's motion
+limits: plan_results.py; stamped likewise), /ftplan/plan/failure_surface (S_F) and
+/ftplan/plan/approach, and 50 ms later on /ftplan/plan/markers for RViz; match them to
+a response by stamp (PlanClient does).
 Its robot (a digest of the model), obstacle set (a digest), task, tolerances, tolerated
 joints and approach are values of the 'ftplan_planner: plan' status (plan_info.py), which
 also goes out latched, stamped like the plan, on /ftplan/plan/info. A failed request
@@ -77,13 +78,19 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 
 from ftplan_msgs_py import DEFAULT_JOINT_SPACE_FRAME, create_path
-from ftplan_ros.core import InputError, ManifoldCache, PlanResult, Scene, load_kernels
+from ftplan_ros.core import InputError, ManifoldCache, PlanResult, Robot, Scene, load_kernels
 from ftplan_ros.core.grid.free_components import PROOF_GRIDS, START_GRIDS
 from ftplan_ros.core.io.scene_file import parse_tolerated
+from ftplan_ros.core.model.motion_limits import MotionLimits, robot_motion_limits
 from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.core.planning.reachable import ReachablePlan
 
 from .inputs import read_arm_state
+from .motion_limit_parameters import (
+    SCALING_FACTORS,
+    declare_motion_limit_parameters,
+    file_motion_limits,
+)
 from .obstacle_topic import FULL_SET_FIX, ObstacleTopic
 from .params import (
     add_validators,
@@ -135,6 +142,7 @@ class PlannerNode(Node):
             self.pool = PlanPool(workers) if workers else None
             if self.source.scene is not None:
                 check_settings(self.source.scene, self._settings())  # a bad one stops the start
+                self._motion_limits(self.source.scene.robot)  # so does a bad joint_limits_file
                 self._use_scene(self.source.scene)
             self._create_interfaces()
             self.get_logger().info(f'serving {PLAN_SERVICE}' + (
@@ -148,7 +156,8 @@ class PlannerNode(Node):
 
     def _declare_parameters(self) -> None:
         declare(self, 'max_joint_speed', 1.0,
-                'Fastest joint speed [rad/s] used to time /ftplan/plan/trajectory.')
+                'Cap [rad/s] on every joint\'s speed in /ftplan/plan/trajectory and '
+                '/ftplan/plan/approach, below the robot\'s velocity limits.')
         declare(self, 'margin', 0.0,
                 'Clearance [m] the guarantee keeps from every obstacle.')
         declare(self, 'seed', 0,
@@ -186,7 +195,8 @@ class PlannerNode(Node):
                 f'(planar 3R arms among disks): one of {", ".join(map(str, PROOF_GRIDS))}; '
                 'finer decides narrower gaps but takes longer and more memory (384: about '
                 '1 s and 0.4 GB).')
-        validators = {'max_joint_speed': positive, 'margin': non_negative,
+        validators = declare_motion_limit_parameters(self) | {
+                      'max_joint_speed': positive, 'margin': non_negative,
                       'seed': non_negative, 'plan_timeout': positive,
                       'plan_workers': _check_plan_workers,
                       'approach_time': positive,
@@ -234,6 +244,15 @@ class PlannerNode(Node):
         return RequestSettings(self.get_parameter('task_kind').value,
                                float(self.get_parameter('orientation_tolerance').value),
                                tuple(array_parameter(self, 'tolerate')))
+
+    def _motion_limits(self, robot: Robot) -> MotionLimits:
+        """Return the limits plans for `robot` are timed within: its own or the file's, scaled.
+
+        Raises InputError naming joint_limits_file when the file does not fit the robot.
+        """
+        limits = file_motion_limits(self, robot) or robot_motion_limits(robot)
+        return limits.scaled(*(float(self.get_parameter(name).value)
+                               for name in SCALING_FACTORS))
 
     def _use_scene(self, scene: Scene) -> None:
         """Plan with `scene` from now on (its robot is new: forget the old joint state).
@@ -320,7 +339,7 @@ class PlannerNode(Node):
         values: dict[str, object] = {'stamp': stamp_key(stamp)}
         timeout = float(self.get_parameter('plan_timeout').value)
         try:
-            scene, result, reachable = self._answer(request, values, timeout)
+            scene, result, reachable, limits = self._answer(request, values, timeout)
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             reason, level = refusal(error, timeout)
             if level == 'ERROR':
@@ -339,27 +358,29 @@ class PlannerNode(Node):
         approach = None if reachable is None else reachable.approach
         values.update(found_values(scene, result, approach))
         # The response first: the results and the report follow it (plan_results.py).
-        self.results.publish(scene, result, approach, stamp, values)
+        self.results.publish(scene, result, approach, stamp, values, limits)
         positions, orientations = end_effector_poses(scene.robot, result.nominal_path)
         response.plan = create_path(positions, scene.frame_id, stamp, orientations)
         return response
 
     def _answer(self, request: GetPlan.Request, values: dict, timeout: float,
-                ) -> tuple[Scene, PlanResult, ReachablePlan | None]:
+                ) -> tuple[Scene, PlanResult, ReachablePlan | None, MotionLimits]:
         """Read the request, plan it, check the robot stayed; raise on the way (refusal).
 
-        `values` get the plan status's description of the request (plan_info.py).
+        `values` get the plan status's description of the request (plan_info.py). Returns
+        the motion limits the plan is timed within too.
         """
         scene, q = self._request_scene(request)
-        values.update(plan_info_values(scene.robot, scene.obstacles, scene.task, [
+        limits = self._motion_limits(scene.robot)
+        values.update(plan_info_values(scene.robot, limits, scene.obstacles, scene.task, [
             scene.robot.joint_names[i] for i in scene.tolerated_joints]))
-        result, reachable = self._plan(scene, q, timeout)
+        result, reachable = self._plan(scene, q, timeout, limits)
         self._check_robot_kept(values['robot'])
-        return scene, result, reachable
+        return scene, result, reachable, limits
 
-    def _plan(self, scene: Scene, q: np.ndarray | None, timeout: float,
+    def _plan(self, scene: Scene, q: np.ndarray | None, timeout: float, limits: MotionLimits,
               ) -> tuple[PlanResult, ReachablePlan | None]:
-        """Plan the request's scene; with q, for the arm standing there (plan_from).
+        """Plan the request's scene within motion `limits`; with q, for the arm standing there.
 
         In a plan worker when there are any, else here. Raises PlanTimeout at the first
         stage of the search that starts `timeout` [s] after the planning did,
@@ -370,7 +391,8 @@ class PlannerNode(Node):
             seed=int(self.get_parameter('seed').value),
             approach=bool(self.get_parameter('approach').value),
             approach_time=float(self.get_parameter('approach_time').value),
-            proof_cells=int(self.get_parameter('approach_proof_cells').value)), timeout)
+            proof_cells=int(self.get_parameter('approach_proof_cells').value),
+            motion_limits=limits), timeout)
         if self.pool is not None:
             return self.pool.run(job)
         return run_job(job, self.cache)

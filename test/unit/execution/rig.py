@@ -5,6 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ftplan_ros.core import CollisionChecker, Obstacle
+from ftplan_ros.core.model.motion_limits import motion_limits_digest, robot_motion_limits
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.core.model.robot import robot_digest
 from ftplan_ros.execution.actions import Moment, Status, Stop
@@ -35,7 +36,7 @@ class Rig:
     """
 
     def __init__(self, scene, result, surface=None, tolerated=None, digest=None, goal=None,
-                 **options):
+                 limits_digest=None, **options):
         self.scene, self.result = scene, result
         self.monotonic, self.ros_ns = 100.0, 1_000_000_000_000
         self.obstacles = Obstacles(CollisionChecker(scene.robot, scene.obstacles))
@@ -44,7 +45,9 @@ class Rig:
         self.plan = HeldPlan(PLAN_KEY, result.theta_s, surface or result.surface, scene.robot,
                              np.array(goal or scene.task.goal),
                              tolerated or scene.robot.joint_names,
-                             digest or robot_digest(scene.robot))
+                             digest or robot_digest(scene.robot),
+                             limits_digest or motion_limits_digest(ExecutorOptions(
+                                 **options).scaled(robot_motion_limits(scene.robot))))
         self.executor.hold(self.plan, self.now())
         self.q = None
 

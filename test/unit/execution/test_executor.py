@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ftplan_ros.core import PlanarChain
+from ftplan_ros.core.model.motion_limits import motion_limits_digest, robot_motion_limits
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.execution.actions import Rejected, Stop
 from ftplan_ros.execution.executor import Executor
@@ -100,6 +101,20 @@ def test_a_plan_for_another_robot_is_refused(make_rig):
     assert refused.message.startswith(f'plan {PLAN_KEY} was made for robot 0123456789ab, but '
                                       'the robot is now ')
     assert refused.message.endswith(' (from /robot_description): plan again')
+
+
+def test_a_plan_timed_within_other_motion_limits_is_refused_naming_both_digests(make_rig):
+    """Issue 36, item 3: the plan status's motion_limits digest differs from the executor's
+    (the robot's limits times its scaling factors)."""
+    rig = make_rig(limits_digest='0123456789ab', max_velocity_scaling_factor=0.5)
+    ours = motion_limits_digest(robot_motion_limits(rig.scene.robot).scaled(0.5, 1.0))
+    refused = rig.start()
+    assert not refused.success
+    assert refused.message == (
+        f'plan {PLAN_KEY} was timed within motion limits 0123456789ab, but the executor\'s are '
+        f'{ours} (joint_limits_file, max_velocity_scaling_factor, '
+        'max_acceleration_scaling_factor): give the planner the same, plan again')
+    assert make_rig(max_velocity_scaling_factor=0.5).start().success
 
 
 def test_obstacles_on_the_failure_surface_refuse_a_run(rig):

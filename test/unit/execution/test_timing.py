@@ -2,12 +2,18 @@
 
 import numpy as np
 import pytest
+from trajectory_replay import limit_violations
 
 from ftplan_ros.core.model.motion_limits import MotionLimits, default_motion_limits
 from ftplan_ros.core.model.paths import point_at_fraction
-from ftplan_ros.core.planning.timing import TimedPath, braking_speed_scaling, time_within_limits
+from ftplan_ros.core.planning.timing import (
+    TimedPath,
+    at_speed,
+    at_vertices,
+    braking_speed_scaling,
+    time_within_limits,
+)
 
-from .replay import limit_violations
 from .rig import commands
 
 PANDA_LIKE = MotionLimits([2.0, 1.0, 3.0], [15.0, 7.5, 10.0], [7500.0, 3750.0, 5000.0])
@@ -66,6 +72,25 @@ def test_the_fig3a_nominal_path_is_timed_within_the_default_limits(fig3a, max_st
     _, result = fig3a
     _, problems = replayed(np.asarray(result.nominal_path), default_motion_limits(3), max_step)
     assert problems == []
+
+
+def test_a_planned_path_is_timed_at_its_own_vertices_within_every_limit(fig3a):
+    """Issue 36, item 2: the planner's latched trajectory is the nominal path's very numbers
+    (S_F holds it), timed as the executor times its command, at the braking-safe speed."""
+    _, result = fig3a
+    path = np.asarray(result.nominal_path)
+    limits = PANDA_LIKE.capped(0.8)
+    full = time_within_limits(path, limits)
+    timed = at_vertices(at_speed(full, 0.5), path)
+    assert np.array_equal(timed.positions, path)
+    assert limit_violations(timed.positions, timed.velocities, timed.accelerations, timed.times,
+                            limits, FREE, max_step=None) == []
+    assert timed.times[-1] == pytest.approx(2.0 * full.times[-1])
+    assert at_speed(full, 1.0) is full
+    with pytest.raises(ValueError, match='speed must be in'):
+        at_speed(full, 0.0)
+    with pytest.raises(ValueError, match='is not among the timed points'):
+        at_vertices(full, path + 1e-6)
 
 
 def test_every_command_of_a_run_with_a_lock_replays_within_the_limits(make_rig):

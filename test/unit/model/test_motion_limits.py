@@ -14,7 +14,9 @@ from ftplan_ros.core.io.scene_file import load_scene
 from ftplan_ros.core.model.motion_limits import (
     DEFAULT_MAX_ACCELERATION,
     DEFAULT_MAX_VELOCITY,
+    MotionLimits,
     default_motion_limits,
+    motion_limits_digest,
     parse_joint_limits,
     robot_motion_limits,
 )
@@ -117,3 +119,17 @@ def test_load_joint_limits_reads_a_file(tmp_path):
     path.write_text('joint_limits: {j2: [1, 2\n')
     with pytest.raises(InputError):
         load_joint_limits(path, NAMES, BASE)
+
+
+def test_the_motion_limits_digest_names_the_limits_a_plan_is_timed_within():
+    """Issue 36, item 3: velocity, acceleration and jerk, as scaled; unbounded jerk too."""
+    panda = robot_motion_limits(load_scene(SCENES / 'panda_shelf.yaml').robot)
+    digest = motion_limits_digest(panda)
+    assert len(digest) == 12 and int(digest, 16) >= 0
+    assert motion_limits_digest(panda.scaled(1.0, 1.0)) == digest           # stable
+    others = [panda.scaled(0.5, 1.0), panda.scaled(1.0, 0.5), BASE, BASE.scaled(1.0, 0.9),
+              MotionLimits(panda.velocity, panda.acceleration, panda.jerk * 2.0)]
+    assert len({digest, *map(motion_limits_digest, others)}) == len(others) + 1
+    # Scaled limits are the limits: the same numbers from another file give the same digest.
+    halved = MotionLimits(panda.velocity * 0.5, panda.acceleration, panda.jerk)
+    assert motion_limits_digest(halved) == motion_limits_digest(panda.scaled(0.5, 1.0))

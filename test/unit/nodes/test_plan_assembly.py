@@ -24,8 +24,8 @@ STAMP = Time(sec=12, nanosec=5)
 KEY = '12.000000005'
 NOMINAL = np.array([[0.0, 0.1, 0.2], [0.1, 0.2, 0.3], [0.2, 0.3, 0.4]])
 SURFACE = np.stack([NOMINAL + 0.5, NOMINAL, NOMINAL - 0.5])  # the nominal path is path 1
-INFO = {'stamp': KEY, 'robot': 'abc123', 'obstacle_set': 'def456', 'task_kind': 'planar',
-        'start': '[2.0, 0.0]', 'goal': '[1.0, 0.0]', 'tolerance': 0.01,
+INFO = {'stamp': KEY, 'robot': 'abc123', 'motion_limits': '123abc', 'obstacle_set': 'def456',
+        'task_kind': 'planar', 'start': '[2.0, 0.0]', 'goal': '[1.0, 0.0]', 'tolerance': 0.01,
         'orientation_tolerance': 0.01, 'tolerated_joints': 'joint1,joint3'}
 
 

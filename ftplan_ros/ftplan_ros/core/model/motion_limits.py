@@ -18,6 +18,7 @@ rad/s², rad/s³.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -74,6 +75,21 @@ class MotionLimits:
         return MotionLimits(self.velocity * velocity_scaling,
                             self.acceleration * acceleration_scaling,
                             self.jerk * acceleration_scaling)
+
+    def capped(self, max_velocity: float) -> MotionLimits:
+        """Return the limits with every joint's velocity at most `max_velocity` [rad/s]."""
+        return MotionLimits(np.minimum(self.velocity, max_velocity), self.acceleration, self.jerk)
+
+
+def motion_limits_digest(limits: MotionLimits) -> str:
+    """Name motion limits by a digest of every number: 12 hex digits.
+
+    Of the limits as a plan is timed within them, scaling factors applied: a file and
+    factors giving the same limits give the same digest. Unbounded jerk counts as None.
+    """
+    values = [[float(v) if math.isfinite(v) else None for v in row]
+              for row in (limits.velocity, limits.acceleration, limits.jerk)]
+    return hashlib.sha256(repr(values).encode()).hexdigest()[:12]
 
 
 def check_scaling_factor(value: Any, where: str) -> float:

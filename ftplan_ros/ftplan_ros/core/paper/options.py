@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..model.motion_limits import MotionLimits
 from .manifolds import ManifoldOptions
 from .verification import VerificationOptions
 
@@ -34,3 +35,5 @@ class PlannerOptions:
     # Recovery sheets: joint grids classified in turn, each tried pooled to half as many
     # cells per joint first (recovery_sheets.RecoverySheets.run).
     sheet_cells: tuple[int, ...] = (128, 256)
+    # The limits stats['max_safe_speed'] is found within (None: the robot's own).
+    motion_limits: MotionLimits | None = None

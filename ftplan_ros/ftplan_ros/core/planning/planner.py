@@ -108,7 +108,7 @@ def plan(scene: Scene, options: PlannerOptions | None = None,
         result = plan_on_curves(scene, options, rng, report, cache, start_configuration)
     if result.feasible:
         result = replace(result, stats=dict(result.stats, max_safe_speed=_max_safe_speed(
-            scene, checker, result.nominal_path, options.verification.margin)))
+            scene, checker, result.nominal_path, options)))
     stats = {'method': PAPER_METHOD} | dict(result.stats, plan_time_s=time.perf_counter() - started)
     log.info('plan %s in %.3f s%s', 'found' if result.feasible else 'not found',
              stats['plan_time_s'], f': {result.reason}' if result.reason else '')
@@ -188,13 +188,14 @@ def _same_task_point(task) -> bool:
     return bool(angle <= task.orientation_tolerance)
 
 
-def _max_safe_speed(scene: Scene, checker: CollisionChecker, nominal_path, margin: float,
-                    ) -> float:
+def _max_safe_speed(scene: Scene, checker: CollisionChecker, nominal_path,
+                    options: PlannerOptions) -> float:
     """Return the fraction (0..1] of the time-optimal speed that brakes inside certified boxes.
 
-    Of the robot's full limits along the nominal path, at which a lock anywhere on it
-    brakes inside a certified box (timing.py); 0: no speed does.
+    Of the options' motion limits (else the robot's) along the nominal path, at which a
+    lock anywhere on it brakes inside a certified box (timing.py); 0: no speed does.
     """
-    limits = robot_motion_limits(scene.robot)
+    limits = options.motion_limits or robot_motion_limits(scene.robot)
     timed = time_within_limits(np.asarray(nominal_path, dtype=float), limits)
-    return braking_speed_scaling(checker, timed, limits.acceleration, margin)
+    return braking_speed_scaling(checker, timed, limits.acceleration,
+                                 options.verification.margin)

@@ -36,6 +36,7 @@ from ..model.paths import densify
 DEFAULT_MAX_STEP = 0.05      # [rad] farthest any joint moves between two points
 _RELATIVE_SLACK = 1e-6       # the checks' numerical tolerance, relative to each limit
 _SHORTEST = 1e-12            # [rad] points closer than this are one point
+_SAME = 1e-9                 # [rad] a cut point this close to a vertex is the vertex
 _FEWEST_STEPS = 8            # grid intervals of the shortest path
 
 logging.getLogger('toppra').setLevel(logging.WARNING)
@@ -122,6 +123,33 @@ def slowed(timed: TimedPath, factor: float) -> TimedPath:
     """Return the same points `factor` (>= 1) times slower: v / factor, a / factor²."""
     return TimedPath(timed.positions, timed.velocities / factor,
                      timed.accelerations / factor ** 2, timed.times * factor)
+
+
+def at_speed(timed: TimedPath, speed: float) -> TimedPath:
+    """Return `timed` run at `speed` (0, 1] of its own speed (a braking_speed_scaling)."""
+    if not 0.0 < speed <= 1.0:
+        raise ValueError(f'speed must be in (0, 1], got {speed}')
+    return slowed(timed, 1.0 / speed) if speed < 1.0 else timed
+
+
+def at_vertices(timed: TimedPath, path: np.ndarray) -> TimedPath:
+    """Return the points of `timed`, a timing of `path` (k, n) [rad], at `path`'s vertices.
+
+    The positions are `path`'s own numbers (the timing's cut points may differ from them
+    in the last bit). A vertex that repeats the one before keeps its time: the times
+    are then not strictly increasing. The finite differences between vertices are means
+    of the timing's own, so they keep its limits; the steps between them do not.
+    """
+    path = np.asarray(path, dtype=float)
+    indices, start = [], 0
+    for vertex in path:
+        at = np.flatnonzero(np.max(np.abs(timed.positions[start:] - vertex), axis=1) <= _SAME)
+        if not len(at):
+            raise ValueError(f'vertex {vertex.tolist()} is not among the timed points')
+        start += int(at[0])
+        indices.append(start)
+    return TimedPath(path.copy(), timed.velocities[indices], timed.accelerations[indices],
+                     timed.times[indices])
 
 
 def braking_speed_scaling(checker: CollisionChecker, timed: TimedPath,
