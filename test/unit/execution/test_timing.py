@@ -37,6 +37,21 @@ def test_a_path_with_sharp_corners_is_timed_on_the_path_within_every_limit(limit
     assert np.array_equal(timed.positions[-1], ZIGZAG[-1])
 
 
+def test_a_path_that_turns_back_stops_there_instead_of_crawling():
+    """The end of a recovery on crowded_sheets_100 (joint1 locked at 6 %): the path turns
+    back for its last 0.03 rad. TOPP-RA on a spline through the turn crawled over the
+    last step, 190 s of a 196 s command, and the drill timed out."""
+    end = np.array([[1.339393, -4.074282, 0.834513], [1.339393, -4.115178, 0.87541],
+                    [1.339393, -4.156075, 0.916307], [1.339393, -4.196971, 0.957204],
+                    [1.339393, -4.181259, 0.94914], [1.339393, -4.167548, 0.939686]]) + \
+        [0.0, 2.0 * np.pi, 0.0]                            # within FREE, the same turn
+    timed, problems = replayed(end, default_motion_limits(3))
+    assert problems == []
+    turn = int(np.flatnonzero(np.all(timed.positions == end[3], axis=1))[0])
+    assert np.all(timed.velocities[turn] == 0.0)          # it stops to turn back
+    assert timed.times[-1] < 2.0                           # 0.16 rad: not minutes
+
+
 def test_jerk_limits_are_kept_by_slowing_down():
     """TOPP-RA bounds no jerk: the uniform slow-down does; without it the jerk limit breaks."""
     tight = MotionLimits(PANDA_LIKE.velocity, PANDA_LIKE.acceleration, [20.0, 20.0, 20.0])
