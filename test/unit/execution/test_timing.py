@@ -52,6 +52,19 @@ def test_a_path_that_turns_back_stops_there_instead_of_crawling():
     assert timed.times[-1] < 2.0                           # 0.16 rad: not minutes
 
 
+def test_points_a_rounding_error_apart_are_one_point():
+    """The end of a recovery of the iiwa (iiwa_joint_1 locked at 68.6 % of iiwa_table's
+    nominal path) repeats a point to within 2e-11 rad: TOPP-RA's spline through it gave
+    the last step 90 s of a 94 s command."""
+    end = np.array([[-0.509185694038, -0.932781954397, 1.487635225741, 0.412723069521],
+                    [-0.508035981554, -0.929485274213, 1.487577984307, 0.410809919801],
+                    [-0.508035981551, -0.929485274205, 1.487577984306, 0.410809919796],
+                    [-0.508035981545, -0.929485274186, 1.487577984303, 0.410809919785],
+                    [-0.49953227174, -0.90345426981, 1.487112378303, 0.396156145922]])
+    timed = time_within_limits(end, default_motion_limits(4))
+    assert timed.times[-1] < 1.0                           # 0.03 rad: not a minute
+
+
 def test_jerk_limits_are_kept_by_slowing_down():
     """TOPP-RA bounds no jerk: the uniform slow-down does; without it the jerk limit breaks."""
     tight = MotionLimits(PANDA_LIKE.velocity, PANDA_LIKE.acceleration, [20.0, 20.0, 20.0])

@@ -39,7 +39,7 @@ from ..model.paths import densify
 
 DEFAULT_MAX_STEP = 0.05      # [rad] farthest any joint moves between two points
 _RELATIVE_SLACK = 1e-6       # the checks' numerical tolerance, relative to each limit
-_SHORTEST = 1e-12            # [rad] points closer than this are one point
+_SHORTEST = 1e-9             # [rad] points closer than this are one point (as _SAME)
 _SAME = 1e-9                 # [rad] a cut point this close to a vertex is the vertex
 _FEWEST_STEPS = 8            # grid intervals of the shortest path
 
