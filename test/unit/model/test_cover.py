@@ -13,6 +13,7 @@ from scipy.spatial import ConvexHull, Delaunay, cKDTree
 from shape_references import surface_points
 
 from ftplan_ros.core.model.cover import (
+    MAX_CUT_TRIANGLES,
     MAX_PIECES,
     TIGHT_PADDING,
     assign_triangles,
@@ -115,6 +116,16 @@ def test_a_triangle_no_one_piece_holds_is_cut_and_held_by_two():
     assert parts is not None and all(len(part) for part in parts)
     assert sum(len(part) for part in parts) > 1
     assert assign_triangles(triangle, [low]) is None
+
+
+@pytest.mark.parametrize('corner', [(100.0, 0.0, 0.0), (np.nan, 0.0, 0.0), (1e30, 0.0, 0.0)],
+                         ids=['100-m', 'nan', '1e30'])
+def test_a_mesh_that_would_be_cut_into_too_many_triangles_is_refused(corner):
+    """Its triangles were quartered to 2 cm edges without a cap: a 100 m triangle (a mesh
+    in millimetres read as metres) asked for 67 million, a NaN corner for ever more."""
+    vertices = np.array([corner, (0.0, 0.1, 0.0), (0.0, 0.0, 0.1)])
+    with pytest.raises(ValueError, match=f'would be more than {MAX_CUT_TRIANGLES}'):
+        build_cover(vertices, np.array([[0, 1, 2]]))
 
 
 def test_an_empty_mesh_has_no_cover():

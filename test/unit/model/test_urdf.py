@@ -19,6 +19,7 @@ from ftplan_testing import (
     bot,
     bot_urdf,
     robot_config,
+    write_binary_stl,
 )
 
 from ftplan_ros.core.errors import InputError
@@ -295,6 +296,26 @@ def test_a_chain_whose_moving_links_have_no_collision_geometry_is_refused():
     with pytest.raises(InputError, match=r"robot\.file: no link that the joints 'base' -> "
                        r"'tip' move has <collision> geometry"):
         robot_from_urdf(bare, 'tip', task_kind='position')
+
+
+@pytest.mark.parametrize('scale, corner, words', [
+    (3000.0, 0.0, r"is 600 m across \(at most 10 m\): is it in millimetres\? give "
+                  r'scale="0.001 0.001 0.001"'),
+    (1.0, np.nan, 'has a vertex that is not finite'),
+    (1.0, np.inf, 'has a vertex that is not finite'),
+], ids=['millimetres-as-metres', 'nan', 'inf'])
+def test_a_mesh_too_wide_or_not_finite_is_refused_naming_link_and_file(urdf_file, scale, corner,
+                                                                     words):
+    """Such a mesh was cut into triangles of 2 cm until the memory ran out."""
+    vertices, faces = TETRAHEDRON
+    vertices = scale * vertices
+    vertices[1, 0] += corner
+    path = urdf_file(bot_urdf('wide.stl'))
+    with np.errstate(invalid='ignore'):  # the normal of a face with an inf corner
+        write_binary_stl(path.parent / 'wide.stl', vertices, faces)
+    with pytest.raises(InputError, match=rf"^robot\.file: mesh {re.escape(str(path.parent))}"
+                       rf"/wide\.stl of link 'l2' {words}"):
+        robot_from_urdf(path.read_text(), 'tcp', mesh_dirs=[str(path.parent)])
 
 
 def test_a_link_named_as_a_joint_gets_one_line_naming_it(urdf_file):

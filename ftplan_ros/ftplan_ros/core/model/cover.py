@@ -38,6 +38,7 @@ _SAMPLE_SPACING = 0.002  # [m] between samples of a piece's surface, for its pad
 _INSIDE = 1e-10  # [m] a corner this close outside a piece's hull counts as in it (rounding)
 _MAX_CUTS = 12  # rounds of cutting the triangles no piece holds, at most
 _MAX_PENDING = 1 << 20  # triangles left to prove, at most: a cover needing more fails
+MAX_CUT_TRIANGLES = 1 << 20  # triangles cut to _CLUSTER_EDGE, at most: a larger mesh is refused
 _CANDIDATES = 32  # nearest triangles (by centroid) measured per sample of a padding
 _STALE_SPLITS = 3  # splits in a row that leave the padding as large end the search
 
@@ -73,7 +74,9 @@ def build_cover(vertices: np.ndarray, faces: np.ndarray, target: float = TIGHT_P
 
     Splits the piece that bulges most until none bulges more than `target` [m] or
     `max_pieces` are made, and keeps the cover of least padding met on the way.
-    Raises ValueError for a mesh without triangles.
+    Raises ValueError for a mesh without triangles, or one whose triangles cut to
+    `_CLUSTER_EDGE` would be more than MAX_CUT_TRIANGLES (a mesh metres across, or with a
+    vertex that is not finite).
     """
     mesh = np.asarray(vertices, dtype=float)[np.asarray(faces, dtype=np.int64)]
     if mesh.ndim != 3 or len(mesh) == 0:
@@ -188,13 +191,21 @@ def _quarter(triangles: np.ndarray) -> np.ndarray:
 
 
 def _cut_to(triangles: np.ndarray, longest: float) -> np.ndarray:
-    """Quarter the triangles (T, 3, 3) whose longest edge exceeds `longest` [m], repeatedly."""
+    """Quarter the triangles (T, 3, 3) whose longest edge exceeds `longest` [m], repeatedly.
+
+    Raises ValueError before the cut triangles would be more than MAX_CUT_TRIANGLES.
+    """
     done = []
+    count = 0  # triangles in done
     pending = triangles
     while len(pending):
         edges = np.linalg.norm(pending - np.roll(pending, 1, axis=1), axis=2).max(axis=1)
         short = edges <= longest
         done.append(pending[short])
+        count += int(short.sum())
+        if count + 4 * int((~short).sum()) > MAX_CUT_TRIANGLES:
+            raise ValueError(f'cut to {100 * longest:g} cm edges, its triangles would be more '
+                             f'than {MAX_CUT_TRIANGLES}: simplify it, or use primitives')
         pending = _quarter(pending[~short])
     return np.concatenate(done)
 
