@@ -6,6 +6,8 @@ convex hulls; the padding against dense samples of the pieces' surfaces measured
 k-d tree over dense samples of the mesh.
 """
 
+import tracemalloc
+
 import numpy as np
 import pytest
 from ftplan_testing import CUBE, capsule_hull, torus
@@ -14,6 +16,7 @@ from shape_references import surface_points
 
 from ftplan_ros.core.model.cover import (
     MAX_CUT_TRIANGLES,
+    MAX_MESH_TRIANGLES,
     MAX_PIECES,
     TIGHT_PADDING,
     assign_triangles,
@@ -124,8 +127,36 @@ def test_a_mesh_that_would_be_cut_into_too_many_triangles_is_refused(corner):
     """Its triangles were quartered to 2 cm edges without a cap: a 100 m triangle (a mesh
     in millimetres read as metres) asked for 67 million, a NaN corner for ever more."""
     vertices = np.array([corner, (0.0, 0.1, 0.0), (0.0, 0.0, 0.1)])
-    with pytest.raises(ValueError, match=f'would be more than {MAX_CUT_TRIANGLES}'):
+    with pytest.raises(ValueError, match=f'would be cut into more than {MAX_CUT_TRIANGLES}'):
         build_cover(vertices, np.array([[0, 1, 2]]))
+
+
+def test_proving_a_cover_holds_a_mesh_takes_no_corners_by_facets_array():
+    """assign_triangles measured every corner against every facet of a piece at once: a
+    smooth collision mesh of 40,000 triangles asked for 35 GiB."""
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(1000, 3))
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    hull = ConvexHull(points)
+    mesh = points[hull.simplices]  # about 2000 triangles, each a facet of the one piece
+    assign_triangles(mesh, [points])  # the compiled kernels, once
+    tracemalloc.start()
+    try:
+        triangles = assign_triangles(mesh, [points])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert triangles is not None and len(triangles[0]) == len(mesh)
+    corners_by_facets = 3 * len(mesh) * len(hull.equations) * 8  # [bytes] 96 MB
+    assert peak < corners_by_facets / 20, peak
+
+
+def test_a_mesh_of_too_many_triangles_is_refused_before_any_work():
+    vertices = np.random.default_rng(4).uniform(-0.1, 0.1, size=(1000, 3))
+    faces = np.arange(3 * (MAX_MESH_TRIANGLES + 1)).reshape(-1, 3) % len(vertices)
+    with pytest.raises(ValueError, match=f'has {MAX_MESH_TRIANGLES + 1} triangles, more than '
+                       f'the {MAX_MESH_TRIANGLES}.*: simplify it'):
+        build_cover(vertices, faces)
 
 
 def test_an_empty_mesh_has_no_cover():

@@ -234,7 +234,7 @@ def _mesh_shape(vertices: np.ndarray, faces: np.ndarray, name: str, where: str) 
     try:
         cover = shape.cover
     except ValueError as error:
-        raise InputError(f'{where}.file', f'{name}: {error}') from None
+        raise InputError(f'{where}.file', f'{name} {error}') from None
     logger.info('%s: %d triangles covered by %d convex piece(s), padding %.2f mm', name,
                 len(faces), len(cover.pieces), 1e3 * cover.largest_padding)
     return shape
