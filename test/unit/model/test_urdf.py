@@ -24,6 +24,7 @@ from ftplan_testing import (
 
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import load_scene, robot_from_urdf
+from ftplan_ros.core.model.cover import assign_triangles
 from ftplan_ros.core.model.robot import task_residuals
 from ftplan_ros.core.model.urdf import chain_from_urdf
 
@@ -168,6 +169,18 @@ def test_mesh_vertices_are_the_stl_file_scaled(bot_urdf_file):
     # STL stores float32: compare to its precision.
     assert np.allclose(np.sort(mesh.vertices, axis=0), np.sort(expected, axis=0), atol=1e-7)
     assert len(np.unique(np.round(mesh.vertices, 6), axis=0)) == len(vertices)
+
+
+def test_a_mesh_mirrored_by_a_negative_scale_is_covered_as_it_is(urdf_file):
+    xml = bot_urdf().replace('scale="1.0 2.0 1.0"', 'scale="-1.0 2.0 1.0"')
+    assert 'scale="-1.0 2.0 1.0"' in xml
+    path = urdf_file(xml)
+    robot = robot_from_urdf(xml, 'tcp', mesh_dirs=[str(path.parent)])
+    mesh = next(item.shape for item in robot.collision_shapes if item.shape.kind == 'mesh')
+    vertices, _ = TETRAHEDRON
+    expected = vertices * np.array([-1.0, 2.0, 1.0])
+    assert np.allclose(np.sort(mesh.vertices, axis=0), np.sort(expected, axis=0), atol=1e-7)
+    assert assign_triangles(mesh.vertices[mesh.faces], list(mesh.cover.pieces)) is not None
 
 
 def test_continuous_and_unaligned_joints(bot_urdf_file):

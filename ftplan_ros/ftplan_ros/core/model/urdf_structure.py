@@ -16,7 +16,8 @@ says which link or joint is wrong and what to change:
 - the tree: each link the child of at most one joint, exactly one root link (the child
   of none), no cycle;
 - every number Pinocchio reads (origins, axes, limits, dynamics, inertials, geometry
-  sizes, mesh scales): decimal, finite, within ±LARGEST_NUMBER, sizes >= 0.
+  sizes, mesh scales): decimal, finite, within ±LARGEST_NUMBER, sizes >= 0, mesh scales
+  nonzero (a negative one mirrors the mesh, which its cover holds as any other).
 
 Units are those of the URDF: metres, radians, kilograms.
 """
@@ -257,7 +258,11 @@ def _check_geometry(element: ElementTree.Element, field: str, what: str) -> None
     if shape.tag == 'mesh':
         if not shape.get('filename'):
             raise InputError(field, f'{what} has a <mesh> without filename=')
-        read_numbers(shape, 'scale', 3, field, f'{what} <mesh>', default='1 1 1')
+        scale = read_numbers(shape, 'scale', 3, field, f'{what} <mesh>', default='1 1 1')
+        if 0.0 in scale:
+            raise InputError(field, f'{what} <mesh> scale="{shape.get("scale")}" has a zero '
+                             'value, which flattens the mesh: give each axis its factor '
+                             '(1 keeps the size; a negative one mirrors)')
         return
     for attribute, count in _SHAPE_SIZES[shape.tag]:
         values = read_numbers(shape, attribute, count, field, f'{what} <{shape.tag}>')
