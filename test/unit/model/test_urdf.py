@@ -226,8 +226,12 @@ def with_mimic(follower: str, leader: str) -> str:
     pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file',
                  "link 'l2': collision mesh 'missing.stl' was not found; looked in",
                  id='missing-mesh-file'),
-    pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file', 'collision geometry',
-                 id='garbage-mesh-file'),
+    pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file',
+                 r"link 'l2': collision mesh /.*/garbage\.stl was found but could not be read "
+                 r'\(.+\): give an STL, OBJ or COLLADA file$', id='garbage-mesh-file'),
+    pytest.param(bot_urdf('empty.stl'), 'tcp', None, 'robot.file',
+                 r"link 'l2': collision mesh /.*/empty\.stl was found but could not be read "
+                 r'\(File is empty\)', id='empty-mesh-file'),
     pytest.param(with_mimic('elbow', 'tilt'), 'tcp', None, 'robot.file',
                  "'elbow' mimics 'tilt'.* coupled joints are not supported", id='mimic-in-chain'),
     pytest.param(with_mimic('finger_joint', 'wrist'), 'tcp', None, 'robot.file',

@@ -17,6 +17,8 @@ with a vertex that is not finite, or wider than MAX_LINK_SIZE, is refused first.
 from __future__ import annotations
 
 import logging
+import re
+import xml.etree.ElementTree as ElementTree
 from collections.abc import Sequence
 
 import numpy as np
@@ -41,6 +43,8 @@ _PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismat
 # [m] The widest a link's collision mesh may be, along any axis: arm links are at most a
 # few metres; a mesh in millimetres read as metres is a thousand times its size.
 MAX_LINK_SIZE = 10.0
+# coal's message for a mesh file it found but could not read: the path, then the reason.
+_UNREADABLE_MESH = re.compile(r'Could not load resource ([^\n]+)\n(.*?)(?:Hint:|$)', re.DOTALL)
 # Joints of a chain: redundant arms have 7 or 8; the cost of building a chain (its
 # self-collision pairs) grows with the square of its links.
 MAX_CHAIN_JOINTS = 32
@@ -79,8 +83,7 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     try:
         geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
     except (ValueError, RuntimeError) as error:
-        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
-                         f'{_one_line(error)}') from None
+        raise _geometry_error(error, xml, where) from None
     model, geometry = _hold_joints_off_the_chain(model, geometry, path, where)
     chain = _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
                    where)
@@ -238,6 +241,27 @@ def _mesh_shape(vertices: np.ndarray, faces: np.ndarray, name: str, where: str) 
     logger.info('%s: %d triangles covered by %d convex piece(s), padding %.2f mm', name,
                 len(faces), len(cover.pieces), 1e3 * cover.largest_padding)
     return shape
+
+
+def _geometry_error(error: Exception, xml: str, where: str) -> InputError:
+    """InputError `<where>.file` for Pinocchio's failure to load a URDF's collision geometry.
+
+    A mesh file that coal cannot read (empty, truncated, not a mesh) is named with its
+    link and coal's reason; Pinocchio's hint that the mesh directory may be wrong is left
+    out, since core/io/mesh_files.py found the file.
+    """
+    found = _UNREADABLE_MESH.search(str(error))
+    if found is None:
+        return InputError(f'{where}.file', f'cannot load its collision geometry: '
+                          f'{_one_line(error)}')
+    path, reason = found.group(1).strip(), ' '.join(found.group(2).split())
+    links = [link.get('name') for link in ElementTree.fromstring(xml).findall('link')
+             if any(mesh.get('filename') == path
+                    for mesh in link.findall('collision/geometry/mesh'))]
+    owner = f'link {links[0]!r}' if links else 'a link'
+    return InputError(f'{where}.file', f'{owner}: collision mesh {path} was found but could '
+                      f'not be read ({reason[:200] or "no reason given"}): give an STL, OBJ or '
+                      'COLLADA file')
 
 
 def _body_frame(model: pin.Model, name: str, where: str) -> int:
