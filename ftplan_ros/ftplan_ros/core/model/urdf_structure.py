@@ -58,7 +58,8 @@ class UrdfDescription:
     """A URDF that passed `read_urdf`: its robot's name, root link, links and text.
 
     `xml` is the document as it was checked (comments left out), for Pinocchio.
-    `mimics` pairs each joint that mimics another with the joint it follows.
+    `mimics` pairs each joint that mimics another with the joint it follows; `joints`
+    are the joints' names.
     """
 
     name: str
@@ -66,6 +67,7 @@ class UrdfDescription:
     links: tuple[str, ...]
     xml: str
     mimics: tuple[tuple[str, str], ...] = ()
+    joints: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -88,7 +90,7 @@ def read_urdf(text: str, where: str = 'robot') -> UrdfDescription:
     links = _unique_names(root.findall('link'), 'link', field)
     if not links:
         raise InputError(field, 'has no <link>: a URDF has at least one')
-    _unique_names(root.findall('joint'), 'joint', field)
+    joint_names = _unique_names(root.findall('joint'), 'joint', field)
     joints = [_joint(element, set(links), field) for element in root.findall('joint')]
     mimics = _mimics(root.findall('joint'), field)
     base = _root_link(links, joints, field)
@@ -97,7 +99,8 @@ def read_urdf(text: str, where: str = 'robot') -> UrdfDescription:
     for material in root.iter('material'):
         for color in material.findall('color'):
             read_numbers(color, 'rgba', 4, field, f'material {material.get("name")!r} <color>')
-    return UrdfDescription(name, base, tuple(links), serialize(root), mimics)
+    return UrdfDescription(name, base, tuple(links), serialize(root), mimics,
+                           tuple(joint_names))
 
 
 def _check_counts(root: ElementTree.Element, field: str) -> None:
