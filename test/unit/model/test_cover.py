@@ -45,8 +45,10 @@ def outside_distance(cover, points):
     outside = np.full(len(points), np.inf)
     for piece in cover.pieces:
         planes = ConvexHull(piece).equations
-        outside = np.minimum(outside, np.maximum(
-            (points @ planes[:, :3].T + planes[:, 3]).max(axis=1), 0.0))
+        for start in range(0, len(points), 50_000):  # (50,000, F) at a time: tens of MB
+            chunk = slice(start, start + 50_000)
+            outside[chunk] = np.minimum(outside[chunk], np.maximum(
+                (points[chunk] @ planes[:, :3].T + planes[:, 3]).max(axis=1), 0.0))
     return outside
 
 
