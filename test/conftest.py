@@ -29,10 +29,12 @@ def bot_urdf_file(tmp_path_factory):
 
 @pytest.fixture
 def urdf_file(tmp_path):
-    """Return write(xml) -> path: a URDF in tmp_path beside the test mesh and a garbage mesh."""
+    """Return write(xml) -> path: a URDF in tmp_path beside the test mesh, a garbage mesh
+    and an empty one."""
     from ftplan_testing import TETRAHEDRON, write_binary_stl  # as above
     write_binary_stl(tmp_path / 'tet.stl', *TETRAHEDRON)
     (tmp_path / 'garbage.stl').write_bytes(b'solid \x00\xff not a mesh\n' * 7)
+    (tmp_path / 'empty.stl').touch()
 
     def write(xml):
         path = tmp_path / 'variant.urdf'

@@ -6,6 +6,8 @@ convex hulls; the padding against dense samples of the pieces' surfaces measured
 k-d tree over dense samples of the mesh.
 """
 
+import tracemalloc
+
 import numpy as np
 import pytest
 from ftplan_testing import CUBE, capsule_hull, torus
@@ -13,6 +15,8 @@ from scipy.spatial import ConvexHull, Delaunay, cKDTree
 from shape_references import surface_points
 
 from ftplan_ros.core.model.cover import (
+    MAX_CUT_TRIANGLES,
+    MAX_MESH_TRIANGLES,
     MAX_PIECES,
     TIGHT_PADDING,
     assign_triangles,
@@ -41,8 +45,10 @@ def outside_distance(cover, points):
     outside = np.full(len(points), np.inf)
     for piece in cover.pieces:
         planes = ConvexHull(piece).equations
-        outside = np.minimum(outside, np.maximum(
-            (points @ planes[:, :3].T + planes[:, 3]).max(axis=1), 0.0))
+        for start in range(0, len(points), 50_000):  # (50,000, F) at a time: tens of MB
+            chunk = slice(start, start + 50_000)
+            outside[chunk] = np.minimum(outside[chunk], np.maximum(
+                (points[chunk] @ planes[:, :3].T + planes[:, 3]).max(axis=1), 0.0))
     return outside
 
 
@@ -115,6 +121,44 @@ def test_a_triangle_no_one_piece_holds_is_cut_and_held_by_two():
     assert parts is not None and all(len(part) for part in parts)
     assert sum(len(part) for part in parts) > 1
     assert assign_triangles(triangle, [low]) is None
+
+
+@pytest.mark.parametrize('corner', [(100.0, 0.0, 0.0), (np.nan, 0.0, 0.0), (1e30, 0.0, 0.0)],
+                         ids=['100-m', 'nan', '1e30'])
+def test_a_mesh_that_would_be_cut_into_too_many_triangles_is_refused(corner):
+    """Its triangles were quartered to 2 cm edges without a cap: a 100 m triangle (a mesh
+    in millimetres read as metres) asked for 67 million, a NaN corner for ever more."""
+    vertices = np.array([corner, (0.0, 0.1, 0.0), (0.0, 0.0, 0.1)])
+    with pytest.raises(ValueError, match=f'would be cut into more than {MAX_CUT_TRIANGLES}'):
+        build_cover(vertices, np.array([[0, 1, 2]]))
+
+
+def test_proving_a_cover_holds_a_mesh_takes_no_corners_by_facets_array():
+    """assign_triangles measured every corner against every facet of a piece at once: a
+    smooth collision mesh of 40,000 triangles asked for 35 GiB."""
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(1000, 3))
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    hull = ConvexHull(points)
+    mesh = points[hull.simplices]  # about 2000 triangles, each a facet of the one piece
+    assign_triangles(mesh, [points])  # the compiled kernels, once
+    tracemalloc.start()
+    try:
+        triangles = assign_triangles(mesh, [points])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert triangles is not None and len(triangles[0]) == len(mesh)
+    corners_by_facets = 3 * len(mesh) * len(hull.equations) * 8  # [bytes] 96 MB
+    assert peak < corners_by_facets / 20, peak
+
+
+def test_a_mesh_of_too_many_triangles_is_refused_before_any_work():
+    vertices = np.random.default_rng(4).uniform(-0.1, 0.1, size=(1000, 3))
+    faces = np.arange(3 * (MAX_MESH_TRIANGLES + 1)).reshape(-1, 3) % len(vertices)
+    with pytest.raises(ValueError, match=f'has {MAX_MESH_TRIANGLES + 1} triangles, more than '
+                       f'the {MAX_MESH_TRIANGLES}.*: simplify it'):
+        build_cover(vertices, faces)
 
 
 def test_an_empty_mesh_has_no_cover():

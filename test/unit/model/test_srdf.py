@@ -2,6 +2,7 @@
 and never exempting a chain link pair the SRDF does not exempt whole."""
 
 import itertools
+import logging
 
 import numpy as np
 import pytest
@@ -169,11 +170,39 @@ def test_any_srdf_text_is_exceptions_or_an_input_error_and_exempts_only_whole_pa
         assert ((a, b) in exempt) == whole
 
 
+def test_an_srdf_named_for_another_robot_naming_only_the_urdfs_links_is_taken_with_a_warning(
+        caplog):
+    """example-robot-data's z1 SRDF says <robot name="z1">, its URDF z1_description: it
+    was refused, where MoveIt only warns."""
+    srdf = ('<robot name="panda_arm"><virtual_joint name="fixed_base" type="fixed" '
+            'parent_frame="world" child_link="panda_link0"/><group name="arm"><chain '
+            'base_link="panda_link0" tip_link="panda_link8"/><joint name="panda_joint1"/>'
+            '</group><group_state name="home" group="arm"><joint name="fixed_base" value="0"/>'
+            '<joint name="panda_joint4" value="-2"/></group_state>'
+            '<disable_collisions link1="panda_link0" link2="panda_link1" reason="Adjacent"/>'
+            '</robot>')
+    with caplog.at_level(logging.WARNING, logger='ftplan_ros.core.model.srdf'):
+        arm = robot_from_urdf(PANDA_URDF.read_text(), 'panda_hand_tcp', 'panda_link0',
+                              srdf=srdf)
+    assert "robot.srdf is written for robot 'panda_arm', the URDF describes 'panda'" in (
+        caplog.text)
+    names = arm.model.link_names
+    assert (names.index('panda_link0'), names.index('panda_link1')) in arm.model.disabled_pairs
+    for original, wrong, named in (('panda_link8', 'panda_link9', "link 'panda_link9'"),
+                                   ('panda_joint1', 'panda_joint9', "joint 'panda_joint9'")):
+        with pytest.raises(InputError, match=rf"robot\.srdf: is written for robot 'panda_arm', "
+                           rf"the URDF describes 'panda', and it names {named}, which the URDF "
+                           'does not have'):
+            robot_from_urdf(PANDA_URDF.read_text(), 'panda_hand_tcp', 'panda_link0',
+                            srdf=srdf.replace(original, wrong))
+
+
 def test_an_srdf_written_for_another_robot_is_refused():
     """Review of issue 34 on vendor models: cassie_v2.srdf (robot 'cassie', no entries)
     given with the Panda's URDF was taken as the Panda's, so every pair was checked and
     the planner blamed obstacles in a scene that had none."""
     with pytest.raises(InputError, match=r"robot\.srdf: is written for robot 'cassie', the "
-                       r"URDF describes 'panda': give the SRDF of this robot"):
+                       r"URDF describes 'panda', and it names none of its links: give the SRDF "
+                       'of this robot'):
         robot_from_urdf(PANDA_URDF.read_text(), 'panda_hand_tcp', 'panda_link0',
                         srdf='<robot name="cassie"><group name="legs"/></robot>')

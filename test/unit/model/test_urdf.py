@@ -19,10 +19,12 @@ from ftplan_testing import (
     bot,
     bot_urdf,
     robot_config,
+    write_binary_stl,
 )
 
 from ftplan_ros.core.errors import InputError
 from ftplan_ros.core.io.scene_file import load_scene, robot_from_urdf
+from ftplan_ros.core.model.cover import assign_triangles
 from ftplan_ros.core.model.robot import task_residuals
 from ftplan_ros.core.model.urdf import chain_from_urdf
 
@@ -169,6 +171,18 @@ def test_mesh_vertices_are_the_stl_file_scaled(bot_urdf_file):
     assert len(np.unique(np.round(mesh.vertices, 6), axis=0)) == len(vertices)
 
 
+def test_a_mesh_mirrored_by_a_negative_scale_is_covered_as_it_is(urdf_file):
+    xml = bot_urdf().replace('scale="1.0 2.0 1.0"', 'scale="-1.0 2.0 1.0"')
+    assert 'scale="-1.0 2.0 1.0"' in xml
+    path = urdf_file(xml)
+    robot = robot_from_urdf(xml, 'tcp', mesh_dirs=[str(path.parent)])
+    mesh = next(item.shape for item in robot.collision_shapes if item.shape.kind == 'mesh')
+    vertices, _ = TETRAHEDRON
+    expected = vertices * np.array([-1.0, 2.0, 1.0])
+    assert np.allclose(np.sort(mesh.vertices, axis=0), np.sort(expected, axis=0), atol=1e-7)
+    assert assign_triangles(mesh.vertices[mesh.faces], list(mesh.cover.pieces)) is not None
+
+
 def test_continuous_and_unaligned_joints(bot_urdf_file):
     robot = bot(bot_urdf_file)
     assert list(robot.periodic) == [True, False, False, False]
@@ -212,8 +226,12 @@ def with_mimic(follower: str, leader: str) -> str:
     pytest.param(bot_urdf('missing.stl'), 'tcp', None, 'robot.file',
                  "link 'l2': collision mesh 'missing.stl' was not found; looked in",
                  id='missing-mesh-file'),
-    pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file', 'collision geometry',
-                 id='garbage-mesh-file'),
+    pytest.param(bot_urdf('garbage.stl'), 'tcp', None, 'robot.file',
+                 r"link 'l2': collision mesh /.*/garbage\.stl was found but could not be read "
+                 r'\(.+\): give an STL, OBJ or COLLADA file$', id='garbage-mesh-file'),
+    pytest.param(bot_urdf('empty.stl'), 'tcp', None, 'robot.file',
+                 r"link 'l2': collision mesh /.*/empty\.stl was found but could not be read "
+                 r'\(File is empty\)', id='empty-mesh-file'),
     pytest.param(with_mimic('elbow', 'tilt'), 'tcp', None, 'robot.file',
                  "'elbow' mimics 'tilt'.* coupled joints are not supported", id='mimic-in-chain'),
     pytest.param(with_mimic('finger_joint', 'wrist'), 'tcp', None, 'robot.file',
@@ -295,6 +313,26 @@ def test_a_chain_whose_moving_links_have_no_collision_geometry_is_refused():
     with pytest.raises(InputError, match=r"robot\.file: no link that the joints 'base' -> "
                        r"'tip' move has <collision> geometry"):
         robot_from_urdf(bare, 'tip', task_kind='position')
+
+
+@pytest.mark.parametrize('scale, corner, words', [
+    (3000.0, 0.0, r"is 600 m across \(at most 10 m\): is it in millimetres\? give "
+                  r'scale="0.001 0.001 0.001"'),
+    (1.0, np.nan, 'has a vertex that is not finite'),
+    (1.0, np.inf, 'has a vertex that is not finite'),
+], ids=['millimetres-as-metres', 'nan', 'inf'])
+def test_a_mesh_too_wide_or_not_finite_is_refused_naming_link_and_file(urdf_file, scale, corner,
+                                                                     words):
+    """Such a mesh was cut into triangles of 2 cm until the memory ran out."""
+    vertices, faces = TETRAHEDRON
+    vertices = scale * vertices
+    vertices[1, 0] += corner
+    path = urdf_file(bot_urdf('wide.stl'))
+    with np.errstate(invalid='ignore'):  # the normal of a face with an inf corner
+        write_binary_stl(path.parent / 'wide.stl', vertices, faces)
+    with pytest.raises(InputError, match=rf"^robot\.file: mesh {re.escape(str(path.parent))}"
+                       rf"/wide\.stl of link 'l2' {words}"):
+        robot_from_urdf(path.read_text(), 'tcp', mesh_dirs=[str(path.parent)])
 
 
 def test_a_link_named_as_a_joint_gets_one_line_naming_it(urdf_file):

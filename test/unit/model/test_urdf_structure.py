@@ -126,6 +126,12 @@ BAD = {
                           'has a <mesh> without filename='),
     'mesh-scale': (link_with('<collision><geometry><mesh filename="m.stl" scale="1 1"/>'
                              '</geometry></collision>'), r'scale="1 1" needs 3 numbers'),
+    'mesh-scale-zero': (link_with('<collision><geometry><mesh filename="m.stl" scale="0 0 0"/>'
+                                  '</geometry></collision>'),
+                        r"link 'a' <collision> number 1 <mesh> scale=\"0 0 0\" has a zero value"),
+    'mesh-scale-one-zero': (link_with('<visual><geometry><mesh filename="m.stl" '
+                                      'scale="1 -0.0 1"/></geometry></visual>'),
+                            r"link 'a' <visual> number 1 <mesh> scale=\"1 -0.0 1\" has a zero"),
     # The text
     'not-xml': ('<robot name="r"><link name="a"></robot>', 'is not valid XML'),
     'entities': (HOSTILE_XML, 'has a DOCTYPE'),

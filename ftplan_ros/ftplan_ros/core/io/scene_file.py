@@ -235,7 +235,8 @@ def robot_from_urdf(xml: str, tip_link: str, base_link: str | None = None,
                          'without them, and robot.srdf gives them: keep one of them')
     offset = vector(list(tip_offset), 'robot.tip_offset', length=3)
     urdf = read_urdf(xml)
-    exceptions = None if srdf is None else read_srdf(srdf, urdf.links, robot_name=urdf.name)
+    exceptions = None if srdf is None else read_srdf(srdf, urdf.links, robot_name=urdf.name,
+                                                         joints=urdf.joints)
     urdf = with_mesh_files(urdf, directory, [Path(d) for d in mesh_dirs])
     model = chain_from_urdf(urdf, tip_link, base_link, offset)
     if not any(item.link >= 1 for item in model.shapes):

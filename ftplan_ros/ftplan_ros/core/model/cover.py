@@ -38,6 +38,10 @@ _SAMPLE_SPACING = 0.002  # [m] between samples of a piece's surface, for its pad
 _INSIDE = 1e-10  # [m] a corner this close outside a piece's hull counts as in it (rounding)
 _MAX_CUTS = 12  # rounds of cutting the triangles no piece holds, at most
 _MAX_PENDING = 1 << 20  # triangles left to prove, at most: a cover needing more fails
+# Triangles of a mesh to cover, at most: proving the cover holds them costs their corners
+# times its facets (a smooth convex mesh of 40,000 takes about 20 s, once: it is cached).
+MAX_MESH_TRIANGLES = 50_000
+MAX_CUT_TRIANGLES = 1 << 20  # triangles cut to _CLUSTER_EDGE, at most: a larger mesh is refused
 _CANDIDATES = 32  # nearest triangles (by centroid) measured per sample of a padding
 _STALE_SPLITS = 3  # splits in a row that leave the padding as large end the search
 
@@ -73,11 +77,17 @@ def build_cover(vertices: np.ndarray, faces: np.ndarray, target: float = TIGHT_P
 
     Splits the piece that bulges most until none bulges more than `target` [m] or
     `max_pieces` are made, and keeps the cover of least padding met on the way.
-    Raises ValueError for a mesh without triangles.
+    Raises ValueError for a mesh without triangles or with more than MAX_MESH_TRIANGLES,
+    or one whose triangles cut to `_CLUSTER_EDGE` would be more than MAX_CUT_TRIANGLES
+    (a mesh metres across, or with a vertex that is not finite).
     """
     mesh = np.asarray(vertices, dtype=float)[np.asarray(faces, dtype=np.int64)]
     if mesh.ndim != 3 or len(mesh) == 0:
-        raise ValueError('a mesh to cover needs at least one triangle')
+        raise ValueError('has no triangle: a mesh to cover needs at least one triangle')
+    if len(mesh) > MAX_MESH_TRIANGLES:
+        raise ValueError(f'has {len(mesh)} triangles, more than the {MAX_MESH_TRIANGLES} a '
+                         'collision mesh may have: simplify it (e.g. a convex hull or a '
+                         'decimated copy), or use primitives')
     cut = _cut_to(mesh, _CLUSTER_EDGE)
     measured = _Mesh(cut)
     clusters = [np.arange(len(cut))]
@@ -135,9 +145,10 @@ def assign_triangles(mesh: np.ndarray, pieces: list[np.ndarray],
 def _holds_points(piece: np.ndarray, hull: np.ndarray | None, points: np.ndarray,
                   ) -> np.ndarray:
     """(P,) bool: whether the piece holds each point (P, 3) (a flat one: its own points)."""
+    points = np.ascontiguousarray(points, dtype=float)
     if hull is not None:
-        return np.all(points @ hull[:, :3].T + hull[:, 3] <= _INSIDE, axis=1)
-    return (points[:, None, :] == piece[None, :, :]).all(axis=2).any(axis=1)
+        return inside_halfspaces(points, np.ascontiguousarray(hull), _INSIDE)
+    return among_points(points, np.ascontiguousarray(piece, dtype=float))
 
 
 def _halfspaces(piece: np.ndarray) -> np.ndarray | None:
@@ -188,13 +199,22 @@ def _quarter(triangles: np.ndarray) -> np.ndarray:
 
 
 def _cut_to(triangles: np.ndarray, longest: float) -> np.ndarray:
-    """Quarter the triangles (T, 3, 3) whose longest edge exceeds `longest` [m], repeatedly."""
+    """Quarter the triangles (T, 3, 3) whose longest edge exceeds `longest` [m], repeatedly.
+
+    Raises ValueError before the cut triangles would be more than MAX_CUT_TRIANGLES.
+    """
     done = []
+    count = 0  # triangles in done
     pending = triangles
     while len(pending):
         edges = np.linalg.norm(pending - np.roll(pending, 1, axis=1), axis=2).max(axis=1)
         short = edges <= longest
         done.append(pending[short])
+        count += int(short.sum())
+        if count + 4 * int((~short).sum()) > MAX_CUT_TRIANGLES:
+            raise ValueError(f'would be cut into more than {MAX_CUT_TRIANGLES} triangles of '
+                             f'{100 * longest:g} cm edges for its cover: simplify it, or use '
+                             'primitives')
         pending = _quarter(pending[~short])
     return np.concatenate(done)
 
@@ -333,3 +353,37 @@ def largest_exact_distance(points: np.ndarray, estimates: np.ndarray, triangles:
                                                  triangles[t]))
         largest = max(largest, np.sqrt(best))
     return largest
+
+
+@numba.njit(cache=True)
+def inside_halfspaces(points: np.ndarray, halfspaces: np.ndarray, tolerance: float,
+                      ) -> np.ndarray:
+    """(P,) bool: whether n · x + d <= tolerance [m] for each point (P, 3) and every facet.
+
+    `halfspaces` (F, 4) are unit normals n and offsets d. A point is measured facet by
+    facet until one leaves it out, with no (P, F) array; NaN is outside.
+    """
+    out = np.empty(points.shape[0], dtype=np.bool_)
+    for k in range(points.shape[0]):
+        x, y, z = points[k, 0], points[k, 1], points[k, 2]
+        inside = True
+        for f in range(halfspaces.shape[0]):
+            plane = halfspaces[f]
+            if not (x * plane[0] + y * plane[1] + z * plane[2] + plane[3] <= tolerance):
+                inside = False
+                break
+        out[k] = inside
+    return out
+
+
+@numba.njit(cache=True)
+def among_points(points: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """(P,) bool: whether each point (P, 3) equals one of `others` (Q, 3)."""
+    out = np.zeros(points.shape[0], dtype=np.bool_)
+    for k in range(points.shape[0]):
+        for q in range(others.shape[0]):
+            if (points[k, 0] == others[q, 0] and points[k, 1] == others[q, 1]
+                    and points[k, 2] == others[q, 2]):
+                out[k] = True
+                break
+    return out

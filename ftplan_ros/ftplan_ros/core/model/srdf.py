@@ -6,7 +6,9 @@ pair and `<enable_collisions link1= link2=/>` checks a pair after all; as in Mov
 pair that is both disabled and enabled is exempt. Every other element (groups, states,
 end effectors, virtual joints) is left alone. A link that is not in the URDF is an
 error, and so is a document over MAX_SRDF_BYTES or with more than MAX_SRDF_ENTRIES
-collision entries.
+collision entries. An SRDF whose <robot name> is not the URDF's is refused unless it names
+links and every link and joint it names is the URDF's: then it is taken with a warning,
+as MoveIt takes it.
 
 The planner checks chain links, each carrying the geometry of the URDF links folded
 into it (fixed joints, locked fingers: urdf.py). A pair of chain links is exempt whole
@@ -18,6 +20,7 @@ ee_link, folded into wrist_3_link): what the SRDF does not exempt stays checked.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Collection
 from dataclasses import dataclass, replace
 from itertools import combinations
@@ -28,6 +31,15 @@ from .description_xml import parse_description
 
 MAX_SRDF_BYTES = 4 * 1024 * 1024  # MoveIt's setup assistant writes about 100 bytes a pair
 MAX_SRDF_ENTRIES = 50_000  # collision entries: a robot of a few hundred links lists thousands
+# (element path, attribute) of the links and the joints an SRDF names (srdfdom's model).
+_NAMED_LINKS = (('group/link', 'name'), ('group/chain', 'base_link'), ('group/chain', 'tip_link'),
+                ('end_effector', 'parent_link'), ('virtual_joint', 'child_link'),
+                ('disable_collisions', 'link1'), ('disable_collisions', 'link2'),
+                ('enable_collisions', 'link1'), ('enable_collisions', 'link2'),
+                ('disable_default_collisions', 'link'), ('link_sphere_approximation', 'link'))
+_NAMED_JOINTS = (('group/joint', 'name'), ('group_state/joint', 'name'), ('passive_joint', 'name'))
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -49,19 +61,20 @@ class CollisionExceptions:
 
 
 def read_srdf(text: str, links: Collection[str], where: str = 'robot.srdf',
-              robot_name: str | None = None) -> CollisionExceptions:
+              robot_name: str | None = None, joints: Collection[str] = (),
+              ) -> CollisionExceptions:
     """Read an SRDF's collision entries, checked against the URDF's `links` and name.
 
-    InputError `where` names the entry and the link that is wrong, or the robot: as
-    MoveIt, an SRDF whose <robot name> is not the URDF's `robot_name` is refused.
+    InputError `where` names the entry and the link that is wrong, or the robot: an SRDF
+    whose <robot name> is not the URDF's `robot_name` is taken with a warning only when
+    it names links, and every link and joint it names is the URDF's (`links`, `joints`).
     """
     root = parse_description(text, where, MAX_SRDF_BYTES)
     if root.tag != 'robot':
         raise InputError(where, f'is not an SRDF: it is a <{root.tag}> element, an SRDF one '
                          '<robot>')
     if robot_name is not None and root.get('name') != robot_name:
-        raise InputError(where, f'is written for robot {root.get("name")!r}, the URDF '
-                         f'describes {robot_name!r}: give the SRDF of this robot')
+        _check_written_for_the_urdf(root, robot_name, set(links), set(joints), where)
     tags = ('disable_collisions', 'enable_collisions', 'disable_default_collisions')
     entries = [element for element in root if element.tag in tags]
     if len(entries) > MAX_SRDF_ENTRIES:
@@ -82,6 +95,32 @@ def read_srdf(text: str, links: Collection[str], where: str = 'robot.srdf',
             pairs[element.tag].add(frozenset(names))
     return CollisionExceptions(frozenset(pairs['disable_collisions']),
                                frozenset(pairs['enable_collisions']), frozenset(no_default))
+
+
+def _check_written_for_the_urdf(root, robot_name: str, links: set[str], joints: set[str],
+                                where: str) -> None:
+    """Warn of an SRDF named for another robot whose names all are the URDF's; else refuse.
+
+    MoveIt (srdfdom) only warns on the name: example-robot-data's z1 SRDF says 'z1' for
+    the URDF 'z1_description'. An SRDF that names no link shows nothing of its robot.
+    """
+    virtual = {element.get('name') for element in root.findall('virtual_joint')}
+    named = [('link', element.get(attribute)) for path, attribute in _NAMED_LINKS
+             for element in root.findall(path) if element.get(attribute)]
+    named += [('joint', element.get(attribute)) for path, attribute in _NAMED_JOINTS
+              for element in root.findall(path)
+              if element.get(attribute) and element.get(attribute) not in virtual]
+    missing = [f'{kind} {name!r}' for kind, name in named
+               if name not in (links if kind == 'link' else joints)]
+    written_for = f'is written for robot {root.get("name")!r}, the URDF describes {robot_name!r}'
+    if missing:
+        raise InputError(where, f'{written_for}, and it names {missing[0]}, which the URDF '
+                         'does not have: give the SRDF of this robot')
+    if not any(kind == 'link' for kind, _ in named):
+        raise InputError(where, f'{written_for}, and it names none of its links: give the '
+                         'SRDF of this robot')
+    logger.warning('%s %s; every link and joint it names is the URDF\'s: it is taken, as '
+                   'MoveIt takes it', where, written_for)
 
 
 def _link(element, attribute: str, known: set[str], where: str, what: str) -> str:

@@ -10,12 +10,15 @@ default of motion_limits.py). Collision geometry is the links' `<collision>` ele
 boxes, cylinders, spheres, capsules and meshes (STL, OBJ, COLLADA: loaded by Pinocchio,
 through coal and assimp, from the paths the URDF gives; core/io/mesh_files.py makes them
 absolute). Each mesh is covered by convex pieces as it is loaded (cover.py; read from
-the cache after the first time), and its cover is logged with the padding it adds.
+the cache after the first time), and its cover is logged with the padding it adds. A mesh
+with a vertex that is not finite, or wider than MAX_LINK_SIZE, is refused first.
 """
 
 from __future__ import annotations
 
 import logging
+import re
+import xml.etree.ElementTree as ElementTree
 from collections.abc import Sequence
 
 import numpy as np
@@ -37,6 +40,11 @@ _CONTINUOUS = ('JointModelRUBX', 'JointModelRUBY', 'JointModelRUBZ',
 # the range narrows by this much at most, which keeps every plan within the true limits.
 TURN_ROUNDING = 1e-4
 _PRISMATIC = ('JointModelPX', 'JointModelPY', 'JointModelPZ', 'JointModelPrismaticUnaligned')
+# [m] The widest a link's collision mesh may be, along any axis: arm links are at most a
+# few metres; a mesh in millimetres read as metres is a thousand times its size.
+MAX_LINK_SIZE = 10.0
+# coal's message for a mesh file it found but could not read: the path, then the reason.
+_UNREADABLE_MESH = re.compile(r'Could not load resource ([^\n]+)\n(.*?)(?:Hint:|$)', re.DOTALL)
 # Joints of a chain: redundant arms have 7 or 8; the cost of building a chain (its
 # self-collision pairs) grows with the square of its links.
 MAX_CHAIN_JOINTS = 32
@@ -75,12 +83,10 @@ def chain_from_urdf(urdf: str | UrdfDescription, tip_link: str, base_link: str |
     try:
         geometry = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
     except (ValueError, RuntimeError) as error:
-        raise InputError(f'{where}.file', f'cannot load its collision geometry: '
-                         f'{_one_line(error)}') from None
+        raise _geometry_error(error, xml, where) from None
     model, geometry = _hold_joints_off_the_chain(model, geometry, path, where)
     chain = _chain(model, geometry, base_link, tip_link, np.asarray(tip_offset, dtype=float),
                    where)
-    _log_covers(chain.shapes)
     return chain
 
 
@@ -133,16 +139,6 @@ def _refuse_coupled_joints(mimics: Sequence[tuple[str, str]], chain: set[str], b
                              'supported there; remove the <mimic> or choose another tip_link')
 
 
-def _log_covers(shapes: Sequence[LinkShape]) -> None:
-    """Cover every mesh now (cover.py) and log each cover's pieces and padding."""
-    for item in shapes:
-        if item.shape.kind == 'mesh':
-            cover = item.shape.cover
-            logger.info('%s: mesh of %d triangles covered by %d convex piece(s), padding '
-                        '%.2f mm', item.urdf_link, len(item.shape.faces), len(cover.pieces),
-                        1e3 * cover.largest_padding)
-
-
 def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_link: str,
            tip_offset: np.ndarray, where: str) -> ChainModel:
     """Read the reduced model (joints 1..n are the chain) into a ChainModel."""
@@ -172,8 +168,9 @@ def _chain(model: pin.Model, geometry: pin.GeometryModel, base_link: str, tip_li
         placement = item.placement.homogeneous
         if item.parentJoint == 0:
             placement = to_base @ placement
-        shapes.append(LinkShape(int(item.parentJoint), _shape(item, where), placement,
-                                model.frames[item.parentFrame].name))
+        link = model.frames[item.parentFrame].name
+        shapes.append(LinkShape(int(item.parentJoint), _shape(item, link, where), placement,
+                                link))
     link_names = [base_link] + [_child_link(model, j) for j in range(1, n + 1)]
     velocities = [float(model.velocityLimit[model.joints[j].idx_v]) for j in range(1, n + 1)]
     return ChainModel(model.name, tuple(model.names[1:n + 1]), tuple(link_names), placements,
@@ -200,7 +197,7 @@ def _joint_axes(model: pin.Model, where: str) -> np.ndarray:
     return np.array(axes)
 
 
-def _shape(item: pin.GeometryObject, where: str) -> Shape:
+def _shape(item: pin.GeometryObject, link: str, where: str) -> Shape:
     geometry = item.geometry
     kind = type(geometry).__name__
     if kind == 'Box':
@@ -217,9 +214,54 @@ def _shape(item: pin.GeometryObject, where: str) -> Shape:
         vertices = np.array(geometry.vertices(), dtype=float).reshape(-1, 3)
         faces = np.array([[geometry.tri_indices(k)[c] for c in range(3)]
                           for k in range(geometry.num_tris)], dtype=np.int64).reshape(-1, 3)
-        return Shape('mesh', vertices=vertices, faces=faces)
+        return _mesh_shape(vertices, faces, f'mesh {item.meshPath} of link {link!r}', where)
     raise InputError(f'{where}.file', f'collision geometry {item.name!r} is a {kind}: '
                      'use box, cylinder, sphere, capsule or mesh')
+
+
+def _mesh_shape(vertices: np.ndarray, faces: np.ndarray, name: str, where: str) -> Shape:
+    """Return a mesh shape, vertices (V, 3) [m] and faces (F, 3), covered now (cover.py).
+
+    Logs the cover's pieces and padding. InputError `<where>.file` naming the mesh
+    (`name`) for a vertex that is not finite, a mesh wider than MAX_LINK_SIZE, or one
+    that cannot be covered.
+    """
+    if not np.isfinite(vertices).all():
+        raise InputError(f'{where}.file', f'{name} has a vertex that is not finite')
+    size = float(np.ptp(vertices, axis=0).max()) if len(vertices) else 0.0
+    if size > MAX_LINK_SIZE:
+        raise InputError(f'{where}.file', f'{name} is {size:.4g} m across (at most '
+                         f'{MAX_LINK_SIZE:g} m): is it in millimetres? give '
+                         'scale="0.001 0.001 0.001"')
+    shape = Shape('mesh', vertices=vertices, faces=faces)
+    try:
+        cover = shape.cover
+    except ValueError as error:
+        raise InputError(f'{where}.file', f'{name} {error}') from None
+    logger.info('%s: %d triangles covered by %d convex piece(s), padding %.2f mm', name,
+                len(faces), len(cover.pieces), 1e3 * cover.largest_padding)
+    return shape
+
+
+def _geometry_error(error: Exception, xml: str, where: str) -> InputError:
+    """InputError `<where>.file` for Pinocchio's failure to load a URDF's collision geometry.
+
+    A mesh file that coal cannot read (empty, truncated, not a mesh) is named with its
+    link and coal's reason; Pinocchio's hint that the mesh directory may be wrong is left
+    out, since core/io/mesh_files.py found the file.
+    """
+    found = _UNREADABLE_MESH.search(str(error))
+    if found is None:
+        return InputError(f'{where}.file', f'cannot load its collision geometry: '
+                          f'{_one_line(error)}')
+    path, reason = found.group(1).strip(), ' '.join(found.group(2).split())
+    links = [link.get('name') for link in ElementTree.fromstring(xml).findall('link')
+             if any(mesh.get('filename') == path
+                    for mesh in link.findall('collision/geometry/mesh'))]
+    owner = f'link {links[0]!r}' if links else 'a link'
+    return InputError(f'{where}.file', f'{owner}: collision mesh {path} was found but could '
+                      f'not be read ({reason[:200] or "no reason given"}): give an STL, OBJ or '
+                      'COLLADA file')
 
 
 def _body_frame(model: pin.Model, name: str, where: str) -> int:

@@ -16,7 +16,8 @@ says which link or joint is wrong and what to change:
 - the tree: each link the child of at most one joint, exactly one root link (the child
   of none), no cycle;
 - every number Pinocchio reads (origins, axes, limits, dynamics, inertials, geometry
-  sizes, mesh scales): decimal, finite, within ±LARGEST_NUMBER, sizes >= 0.
+  sizes, mesh scales): decimal, finite, within ±LARGEST_NUMBER, sizes >= 0, mesh scales
+  nonzero (a negative one mirrors the mesh, which its cover holds as any other).
 
 Units are those of the URDF: metres, radians, kilograms.
 """
@@ -57,7 +58,8 @@ class UrdfDescription:
     """A URDF that passed `read_urdf`: its robot's name, root link, links and text.
 
     `xml` is the document as it was checked (comments left out), for Pinocchio.
-    `mimics` pairs each joint that mimics another with the joint it follows.
+    `mimics` pairs each joint that mimics another with the joint it follows; `joints`
+    are the joints' names.
     """
 
     name: str
@@ -65,6 +67,7 @@ class UrdfDescription:
     links: tuple[str, ...]
     xml: str
     mimics: tuple[tuple[str, str], ...] = ()
+    joints: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -87,7 +90,7 @@ def read_urdf(text: str, where: str = 'robot') -> UrdfDescription:
     links = _unique_names(root.findall('link'), 'link', field)
     if not links:
         raise InputError(field, 'has no <link>: a URDF has at least one')
-    _unique_names(root.findall('joint'), 'joint', field)
+    joint_names = _unique_names(root.findall('joint'), 'joint', field)
     joints = [_joint(element, set(links), field) for element in root.findall('joint')]
     mimics = _mimics(root.findall('joint'), field)
     base = _root_link(links, joints, field)
@@ -96,7 +99,8 @@ def read_urdf(text: str, where: str = 'robot') -> UrdfDescription:
     for material in root.iter('material'):
         for color in material.findall('color'):
             read_numbers(color, 'rgba', 4, field, f'material {material.get("name")!r} <color>')
-    return UrdfDescription(name, base, tuple(links), serialize(root), mimics)
+    return UrdfDescription(name, base, tuple(links), serialize(root), mimics,
+                           tuple(joint_names))
 
 
 def _check_counts(root: ElementTree.Element, field: str) -> None:
@@ -257,7 +261,11 @@ def _check_geometry(element: ElementTree.Element, field: str, what: str) -> None
     if shape.tag == 'mesh':
         if not shape.get('filename'):
             raise InputError(field, f'{what} has a <mesh> without filename=')
-        read_numbers(shape, 'scale', 3, field, f'{what} <mesh>', default='1 1 1')
+        scale = read_numbers(shape, 'scale', 3, field, f'{what} <mesh>', default='1 1 1')
+        if 0.0 in scale:
+            raise InputError(field, f'{what} <mesh> scale="{shape.get("scale")}" has a zero '
+                             'value, which flattens the mesh: give each axis its factor '
+                             '(1 keeps the size; a negative one mirrors)')
         return
     for attribute, count in _SHAPE_SIZES[shape.tag]:
         values = read_numbers(shape, attribute, count, field, f'{what} <{shape.tag}>')
