@@ -32,14 +32,13 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.context import Context
 from rclpy.logging import LoggingSeverity
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 
-from ftplan_msgs_py import read_diagnostic_status, read_joint_state
+from ftplan_msgs_py import DiagnosticReading, read_joint_state
 
 from .core import InputError, Scene, check_plannable, load_scene
 from .core.model.task_space import describe_point
@@ -51,7 +50,6 @@ from .nodes.reporting import parse_number, parse_vector
 from .nodes.sim import SIM_BACKENDS, SimNode
 from .nodes.spinning import BackgroundSpin, RclError
 from .nodes.topics import (
-    DIAGNOSTICS,
     EXECUTOR_NODE,
     INJECTOR_NODE,
     JOINT_STATES,
@@ -145,7 +143,7 @@ class Director:
         names = list(scene.robot.joint_names)
         client.create_subscription(JointState, JOINT_STATES,
                                    lambda msg: self._joint_state(msg, names), 100)
-        client.create_subscription(DiagnosticArray, DIAGNOSTICS, self._injector_status, 50)
+        client.add_status_listener(self._injector_status)
 
     def _joint_state(self, msg: JointState, names: list[str]) -> None:
         if self._record:
@@ -154,15 +152,10 @@ class Director:
             except ValueError:
                 pass
 
-    def _injector_status(self, msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            try:
-                reading = read_diagnostic_status(status)
-            except ValueError:
-                continue
-            execution = reading.values.get('execution')
-            if reading.name == INJECTOR_STATUS and execution and 'drill' in reading.values:
-                self.drills[execution] = reading.values['drill']
+    def _injector_status(self, reading: DiagnosticReading) -> None:
+        execution = reading.values.get('execution')
+        if reading.name == INJECTOR_STATUS and execution and 'drill' in reading.values:
+            self.drills[execution] = reading.values['drill']
 
     def plan(self, timeout: float = 60.0) -> PlannedMotion:
         """Plan the scene's task; a failed plan names the planner's reason."""

@@ -152,6 +152,7 @@ class PlanClient(Node):
         self._statuses: dict[str, DiagnosticReading] = {}
         self._status_log: list[tuple[int, DiagnosticReading]] = []
         self._status_seq = 0
+        self._status_listeners: list[Callable[[DiagnosticReading], None]] = []
         self._plans = PlanTopics(kept=_PLAN_HISTORY)  # the latched results of recent plans
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, self._diagnostics_callback, 50)
         results_qos = QoSProfile(depth=_PLAN_HISTORY, durability=LATCHED_QOS.durability,
@@ -210,7 +211,16 @@ class PlanClient(Node):
             self._statuses[reading.name] = reading
             self._status_seq += 1
             self._status_log.append((self._status_seq, reading))
+            for listener in self._status_listeners:
+                listener(reading)
         del self._status_log[:-_STATUS_LOG_SIZE]
+
+    def add_status_listener(self, listener: Callable[[DiagnosticReading], None]) -> None:
+        """Call `listener` with every status read from /diagnostics, as it comes.
+
+        For what must outlast the bounded log of recent statuses (`statuses`).
+        """
+        self._status_listeners.append(listener)
 
     def status(self, name: str) -> DiagnosticReading | None:
         """Return the latest status `name` seen on /diagnostics (e.g. 'ftplan_sim: arm')."""

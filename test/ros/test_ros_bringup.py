@@ -229,7 +229,7 @@ def test_the_drill_of_a_long_run_is_kept_when_its_statuses_overflow_the_clients_
     talker = Node('ftplan_test_statuses', context=ros_context)
     try:
         publisher = talker.create_publisher(DiagnosticArray, DIAGNOSTICS, 50)
-        wait_for(lambda: publisher.get_subscription_count() >= 2)  # the client's, the director's
+        wait_for(lambda: publisher.get_subscription_count() >= 1)  # the client's
 
         def send(name, values, count=1):
             for _ in range(count):
