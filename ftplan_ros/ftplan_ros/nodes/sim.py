@@ -431,8 +431,10 @@ class SimNode(Node):
             if not self.arm.moving and not self._reported_stop:
                 self._reported_stop = True
                 self._report_stop()
+            elif time.monotonic() - self._last_report >= 1.0 and self.arm.moving:
+                self.report('moving')
             elif time.monotonic() - self._last_report >= 1.0:
-                self.report('moving' if self.arm.moving else 'stopped')
+                self._report_stop()  # a standing arm may still creep (MuJoCo): judge it again
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             self.get_logger().error(traceback.format_exc())
             self.diagnostics.report('arm', 'ERROR', f'internal sim error: {error!r}')
@@ -455,11 +457,12 @@ class SimNode(Node):
             return
         position, angle = (float(v) for v in task_errors(self.robot, goal, self.arm.q))
         self.goal_error, self.goal_orientation_error = position, angle
+        already = self.goal_reached
         self.goal_reached = bool(task.reached(np.array([position, angle])))
         error = f'{position:.2e} m' + (f', {angle:.2e} rad' if self.robot.task_kind in
                                        ('axis', 'pose') else '')
         if self.goal_reached:
-            self.report(f'goal reached (error {error})', log=True)
+            self.report(f'goal reached (error {error})', log=not already)
         else:
             self.report(f'stopped {error} from the goal')
 
