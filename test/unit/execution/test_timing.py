@@ -52,6 +52,24 @@ def test_a_path_that_turns_back_stops_there_instead_of_crawling():
     assert timed.times[-1] < 2.0                           # 0.16 rad: not minutes
 
 
+def test_vertices_close_together_after_sharp_turns_are_timed_without_crawling():
+    """The end of a recovery on crowded_sheets_100 (joint1 locked at 14.1 %): two sharp
+    turns 0.007 and 0.004 rad apart. TOPP-RA's spline through them bent so much that it
+    crawled over the last 0.003 rad for 36 s: the arm moved 1e-4 rad/s, and the
+    executor's watchdog took it for a stall."""
+    end = np.array([[1.36267, -3.80327, 0.5635], [1.36267, -3.85135, 0.61159],
+                    [1.36267, -3.89944, 0.65967], [1.36267, -3.94752, 0.70776],
+                    [1.36267, -3.99561, 0.75584], [1.36267, -4.03588, 0.79611],
+                    [1.36267, -4.07615, 0.83639], [1.36267, -4.11643, 0.87666],
+                    [1.36267, -4.1567, 0.91693], [1.36267, -4.19697, 0.9572],
+                    [1.36267, -4.1965, 0.96402], [1.36267, -4.19337, 0.96684]]) + \
+        [0.0, 2.0 * np.pi, 0.0]                            # within FREE, the same turns
+    timed, problems = replayed(end, default_motion_limits(3))
+    assert problems == []
+    assert timed.times[-1] < 3.0                           # 0.4 rad at 1 rad/s: seconds
+    assert np.all(np.diff(timed.times) < 0.5)              # no step crawls
+
+
 def test_points_a_rounding_error_apart_are_one_point():
     """The end of a recovery of the iiwa (iiwa_joint_1 locked at 68.6 % of iiwa_table's
     nominal path) repeats a point to within 2e-11 rad: TOPP-RA's spline through it gave
