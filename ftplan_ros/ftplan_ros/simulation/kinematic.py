@@ -53,6 +53,10 @@ class Motion:
         commanded = (stamp_ns - self.stamp_ns) * 1e-9
         return self.start + float(np.interp(commanded, self.commanded, self.times))
 
+    def covers(self, stamp_ns: int) -> bool:
+        """Whether ROS time `stamp_ns` [ns] lies on the command's timeline, not after its end."""
+        return (stamp_ns - self.stamp_ns) * 1e-9 <= self.commanded[-1]
+
     def velocity(self, now: float) -> np.ndarray:
         """Return the joint velocities (n,) [rad/s] at the arm's time `now` (0 outside it)."""
         t = now - self.start
@@ -142,13 +146,13 @@ class KinematicArm:
 
         A stamp ahead of where the arm is on its command schedules the lock for that
         moment (`step` takes it). So does a stamp ahead of the ROS time `now_ns` [ns] (0:
-        unknown) while no command is under way: a drill's lock, stamped on the command it
-        belongs to, may come before that command. None when the joint is locked or
-        scheduled already.
+        unknown) with no command under way, or past the end of the one there is: a drill's
+        lock, stamped on the command it belongs to, may come before that command. None
+        when the joint is locked or scheduled already.
         """
         if joint in self.locked or any(joint == j for j, _, _, _ in self._scheduled):
             return None
-        if stamp_ns and self.motion is not None:
+        if stamp_ns and self.motion is not None and self.motion.covers(stamp_ns):
             ahead = self.motion.time_of(stamp_ns) - self.time
         else:
             ahead = (stamp_ns - now_ns) * 1e-9 if stamp_ns and now_ns else 0.0
@@ -223,10 +227,11 @@ class KinematicArm:
         """Take the scheduled locks due by time `now` [s]; return when the first is due.
 
         The arm moves until that moment (within the step from `before`) and locks there,
-        exactly where its command puts it then; without a command, at the moment it was
-        scheduled for.
+        exactly where its command puts it then; without a command, or stamped past its end,
+        at the moment it was scheduled for.
         """
-        moments = [self.motion.time_of(stamp_ns) if self.motion is not None else moment
+        moments = [self.motion.time_of(stamp_ns) if self.motion is not None and
+                   self.motion.covers(stamp_ns) else moment
                    for _, _, stamp_ns, moment in self._scheduled]
         due = [lock for lock, moment in zip(self._scheduled, moments, strict=True)
                if moment <= now]

@@ -144,6 +144,24 @@ def test_a_lock_stamped_on_a_command_that_comes_after_it_lands_on_that_command()
     assert isinstance(arm().lock(0, None, at(0.55)), Locked)  # without the ROS time: at once
 
 
+def test_a_lock_stamped_past_the_end_of_the_command_there_waits_for_its_own():
+    """The same, with the approach to θ_s still under way in the sim (its clock behind
+    the executor's on a loaded machine): the lock, stamped past the approach's end,
+    locked joint2 when the approach ended, at θ_s (a MuJoCo drill on
+    crowded_sheets_100 failed so, with a tracking error)."""
+    sim = arm()
+    sim.follow(np.array([[0.2, 0.0, 0.0]]), np.array([0.2]), NOW, NOW)   # the approach
+    run(sim, 0.1)
+    outcome = sim.lock(1, None, at(0.85), at(0.1))
+    assert outcome == Scheduled(1, pytest.approx(0.75)) and sim.locked == {}
+    run(sim, 0.22)
+    sim.follow(np.array([[0.2, 1.0, 0.0]]), np.array([1.0]), at(0.35), at(0.32))
+    run(sim, 0.5)
+    assert sim.locked == {}
+    [step] = [step for step in run(sim, 0.1) if step.locks]
+    assert sim.locked == {1: pytest.approx(0.5)}
+
+
 def test_a_scheduled_lock_takes_effect_at_once_when_the_command_is_stopped():
     sim = arm()
     sim.follow(np.array([[1.0, 0.0, 0.0]]), np.array([1.0]), NOW, NOW)
