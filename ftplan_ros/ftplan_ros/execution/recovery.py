@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ftplan_ros.core import InputError, recover
+from ftplan_ros.core.paper.manifolds import project_to_preimage
 from ftplan_ros.core.planning.approach import ApproachPlanner
 
 from .state import Execution
@@ -32,12 +33,15 @@ class WayOn:
 
 
 def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
-                   max_offset: float) -> WayOn:
+                   max_offset: float, planner: ApproachPlanner) -> WayOn:
     """Recover in the run's S_F from q (n,), where its locked joint `name` stopped.
 
     `start` (n,) is where on the nominal path the arm braked from (q when it stopped on
     the path): the path goes straight back there, inside the certified braking box, then
-    on in S_F. `max_offset` [rad] is how far `start` may lie from the nominal path.
+    on in S_F. `max_offset` [rad] is how far `start` may lie from the nominal path. A
+    brake that slipped past the path's range of the joint gets S_F's path moved by the
+    slip, which ends off the goal: it goes on to the goal with the joint where it is,
+    and `planner` must certify the whole path now, or the arm stays where it stopped.
     """
     progress, tolerated = ex.lock_progress, ex.plan.tolerated
     try:
@@ -49,12 +53,29 @@ def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
     note = '' if name in tolerated else \
         ' (not tolerated by this plan, but S_F holds a recovery path)'
     path, length = rescue.path, rescue.length
+    if rescue.slip != 0.0:
+        path = _on_to_the_goal(ex, path, rescue.joint)
+        if path is None or not planner.certify(path):
+            return WayOn(None, float('nan'), f'{name} locked {abs(rescue.slip):.4f} rad past '
+                         f'the nominal path\'s range of it, at {progress:.1%} of the path, and '
+                         'S_F\'s recovery path moved there is not certified clear; the arm is '
+                         'stopped there')
+        length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
     if np.any(start != q):
         path = np.vstack([q[None, :], path])
         length += float(np.linalg.norm(start - q))
     return WayOn(path, length, f'{name} locked at {progress:.1%} of the nominal '
                  f'path{note}: following the recovery path ({len(path)} points, '
                  f'{length:.3f} rad)')
+
+
+def _on_to_the_goal(ex: Execution, path: np.ndarray, joint: int) -> np.ndarray | None:
+    """Return `path` (k, n) [rad] and then its end moved onto the goal, `joint` held.
+
+    None when Newton's method finds no goal configuration from the end.
+    """
+    end = project_to_preimage(ex.plan.robot, ex.plan.goal, path[-1], fixed_joint=joint)
+    return None if end is None else np.vstack([path, end[None, :]])
 
 
 def with_joints_left(planner: ApproachPlanner, ex: Execution, q: np.ndarray, name: str,

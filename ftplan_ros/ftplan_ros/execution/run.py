@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from ftplan_ros.core import FailureSurface, Robot, task_errors
-from ftplan_ros.core.collision.braking import lock_point, segment_speeds
+from ftplan_ros.core.collision.braking import lock_point, point_at_level, segment_speeds
 from ftplan_ros.core.model.angles import configuration_difference, whole_turns
 from ftplan_ros.core.model.motion_limits import MotionLimits
 from ftplan_ros.core.planning.approach import Approach, ApproachOptions, ApproachPlanner, Route
@@ -274,7 +274,8 @@ class Run:
             start = ex.lock_point = self._lock_point(q)
             ex.lock_progress, _ = progress_along(ex.nominal, start)
             ex.progress = ex.lock_progress
-            way = within_surface(ex, q, start, name, options.max_path_offset)
+            way = within_surface(ex, q, start, name, options.max_path_offset,
+                                 self._planner())
         if way.path is None:
             self.fail(way.message, now)  # the arm stands still: keep it so
             return
@@ -286,17 +287,26 @@ class Run:
         """Return where on the nominal path the arm, stopped at q (n,), braked from.
 
         The point of the locked joint's angle (within `max_path_offset`) whose certified
-        braking box holds q (core/collision/braking.py); q itself when none does (the arm
-        stopped on the path, or off every box: recovery then refuses it).
+        braking box holds q (core/collision/braking.py). An arm under physics may stop
+        outside every box: its locked joint lags its command, and where that joint hardly
+        moves along the path, the point of its angle lies far back. The nearest point of
+        the angle is then taken if it lies within `path_tolerance` (the tracking error the
+        executor accepts) and the straight move back to it is certified now. Else q itself
+        (the arm stopped on the path, or recovery refuses it).
         """
         ex = self.record
         sent = ex.nominal_command
         if sent is None or len(sent.path) < 2:
             return q
         speeds = segment_speeds(sent.path, sent.velocities, sent.times)
-        p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint,
-                       self.host.options.max_path_offset)
-        return q if p is None else p
+        offset = self.host.options.max_path_offset
+        p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint, offset)
+        if p is None:
+            p = point_at_level(sent.path, q, ex.locked_joint, offset)
+            if p is None or np.max(np.abs(q - p)) > self.host.options.path_tolerance or \
+                    not self._planner().certify(np.stack([q, p])):
+                return q
+        return p
 
     # Obstacles ----------------------------------------------------------------------
 

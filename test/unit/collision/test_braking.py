@@ -8,6 +8,7 @@ from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.collision.braking import (
     braking_distances,
     lock_point,
+    point_at_level,
     max_safe_speed,
     segment_speeds,
 )
@@ -118,3 +119,5 @@ def test_a_brake_holding_past_the_paths_range_of_the_joint_finds_it_within_the_t
 def test_a_stop_outside_every_braking_box_has_no_lock_point():
     stop = np.array([0.3, 0.1, 0.0])     # 0.25 rad from the path in joint 0
     assert lock_point(PATH, SPEEDS, DECELERATION, stop, 1, tolerance=1e-3) is None
+    assert np.allclose(point_at_level(PATH, stop, 1), [0.05, 0.1, 0.0])  # its angle's point
+    assert point_at_level(PATH, np.array([0.3, 0.25, 0.0]), 1, tolerance=1e-3) is None

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ftplan_ros.core import FailureSurface
+from ftplan_ros.core import task_errors
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.execution.actions import Stop
 from ftplan_ros.execution.state import State
@@ -162,3 +163,38 @@ def test_an_arm_braked_off_the_path_inside_its_box_goes_back_to_the_lock_point_f
     assert np.allclose(command.path[0], rig.q, atol=1e-12)
     assert np.allclose(command.path[1], locked_at, atol=1e-9)
     assert np.all(command.path[:, 1] == locked_at[1])
+
+
+def test_an_arm_stopped_ahead_of_its_locked_joints_angle_goes_back_where_the_move_is_clear(rig):
+    """Issue 37, MuJoCo drills: the locked joint lags its command, so the arm stands
+    where the free joints were sent, 0.02-0.04 rad along the path beyond the point of the
+    locked angle, outside every braking box. The move back there is certified now, and
+    the run recovers instead of refusing ("not on the nominal path")."""
+    lock_on_nominal(rig)
+    locked_at = rig.q.copy()
+    ahead = point_at_fraction(rig.plan.surface.nominal_path, 0.45)
+    rig.q = np.where(np.arange(3) == 1, locked_at, ahead)
+    assert 0.02 < np.max(np.abs(rig.q - locked_at)) < 0.1    # off the path, within path_tolerance
+    [command] = commands(rig.stand())
+    back = int(np.argmin(np.max(np.abs(command.path - locked_at), axis=1)))
+    assert np.allclose(command.path[back], locked_at, atol=1e-6)   # straight back there
+    way = locked_at - rig.q
+    along = (command.path[:back + 1] - rig.q) @ way / np.sum(way ** 2)
+    assert np.allclose(command.path[:back + 1], rig.q + along[:, None] * way)
+    assert np.all(command.path[:, 1] == locked_at[1])
+
+
+def test_a_lock_located_past_the_paths_range_of_its_angle_still_ends_on_the_goal(make_rig):
+    """Issue 37, MuJoCo drills on fig3a: joint2 lagged its command, the free joints
+    stood ahead, and the nearest point of the path within max_path_offset of joint2's
+    angle was a segment's end 0.008 rad beyond it. S_F's recovery path, moved that far,
+    ended 1.4 cm from the goal (tolerance 1 cm). It now goes on to the goal with joint2
+    held, certified."""
+    rig = make_rig(max_path_offset=0.02)
+    lock_on_nominal(rig)
+    locked_at = rig.q.copy()
+    rig.q = np.where(np.arange(3) == 1, locked_at,
+                     point_at_fraction(rig.plan.surface.nominal_path, 0.42))
+    [command] = commands(rig.stand())
+    assert np.all(command.path[:, 1] == locked_at[1])
+    assert task_errors(rig.plan.robot, rig.plan.goal, command.path[-1])[0] < 1e-6

@@ -109,11 +109,29 @@ def lock_point(positions: np.ndarray, speeds: np.ndarray, deceleration: np.ndarr
     a, b = positions[:-1], positions[1:]
     reach = braking_distances(np.asarray(speeds, dtype=float), deceleration)
     inside = np.all((q >= np.minimum(a, b) - reach) & (q <= np.maximum(a, b) + reach), axis=1)
+    return _nearest_at_level(positions, q, joint, tolerance, inside)
+
+
+def point_at_level(positions: np.ndarray, q: np.ndarray, joint: int,
+                   tolerance: float = 0.0) -> np.ndarray | None:
+    """Return the point p of the path (k, n) [rad] with p[joint] = q[joint] nearest q (n,).
+
+    Nearest in the ∞-norm; None when no segment reaches the level (within `tolerance`
+    [rad] beyond its range, as `lock_point`). Unlike `lock_point`, p need not hold q in a
+    braking box: the move from q back to p is then the caller's to certify.
+    """
+    return _nearest_at_level(positions, q, joint, tolerance, np.ones(len(positions) - 1, bool))
+
+
+def _nearest_at_level(positions: np.ndarray, q: np.ndarray, joint: int, tolerance: float,
+                      candidates: np.ndarray) -> np.ndarray | None:
+    """`lock_point` and `point_at_level` among the segments `candidates` (k-1,) bool."""
+    a, b = positions[:-1], positions[1:]
     level = q[joint]
     low = np.minimum(a[:, joint], b[:, joint]) - tolerance
     high = np.maximum(a[:, joint], b[:, joint]) + tolerance
     best, nearest = None, np.inf
-    for k in np.flatnonzero(inside & (low <= level) & (level <= high)):
+    for k in np.flatnonzero(candidates & (low <= level) & (level <= high)):
         rise = b[k, joint] - a[k, joint]
         share = 0.0 if rise == 0.0 else min(1.0, max(0.0, (level - a[k, joint]) / rise))
         p = a[k] + share * (b[k] - a[k])

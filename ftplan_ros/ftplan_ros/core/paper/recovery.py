@@ -32,12 +32,16 @@ class RecoveryPath:
     """How to reach the goal with `joint` locked at `locked_value` [rad].
 
     `path` (k, n) [rad] runs from the configuration where the joint locked to a goal
-    configuration; its component `joint` is `locked_value` throughout.
+    configuration; its component `joint` is `locked_value` throughout. `slip` [rad] is
+    how far the joint locked beyond the nominal path's range of it (a brake that slipped
+    past a turn of its angle): the path is then S_F's slice at the range's end moved by
+    `slip` in that joint, off the certified web, and it ends off the goal row.
     """
 
     joint: int
     locked_value: float
     path: np.ndarray
+    slip: float = 0.0
 
     @property
     def length(self) -> float:
@@ -168,7 +172,7 @@ def recover(surface: FailureSurface, theta: np.ndarray, joint: int,
     path = np.vstack([theta[None, :], route])
     level = float(theta[joint])
     path[:, joint] = level
-    return RecoveryPath(joint, level, path)
+    return RecoveryPath(joint, level, path, level - slice_level)
 
 
 # One piece, as a kernel: the slice's nodes, arcs and Dijkstra share per-call scratch arrays.
