@@ -30,7 +30,8 @@ position servos with the gains and torque limits of `physics_file` track the com
 gravity is on, a lock is a brake, /joint_states carries MuJoCo's positions, velocities
 and torques, and each contact MuJoCo's own collision detection finds is reported on
 /diagnostics with the two bodies and its depth (counted as `contacts`); the arm's
-status adds its largest tracking error and its time to standstill after a lock.
+status adds its largest tracking error, how far a joint or the tool stood from its
+commanded place then, and its time to standstill after a lock.
 `~/reset` (std_srvs/Trigger) puts the arm back at its initial configuration, unlocks
 every joint and clears the counters, for repeated drills.
 
@@ -503,6 +504,7 @@ class SimNode(Node):
         }
         if isinstance(self.arm, MujocoArm):
             values.update(contacts=self.contacts, tracking_error_rad=self.arm.tracking_error,
+                          tracking_displacement_m=self.arm.tracking_displacement,
                           standstill_s=self.arm.standstill_time)
         self.diagnostics.report('arm', level, message, values, log=log)
 

@@ -120,6 +120,9 @@ class MujocoArm:
             swept.append(self.q)
             self._collect_contacts(contacts)
             self._measure()
+        here = self.robot.skeleton(np.stack([self.q, self.reference.q]))
+        self.tracking_displacement = max(self.tracking_displacement, float(np.max(
+            np.linalg.norm(here[0] - here[1], axis=-1))))
         began = [Contact(a, b, depth) for (a, b), depth in contacts.items()
                  if (a, b) not in self._touching]
         self._touching = set(contacts)
@@ -152,6 +155,8 @@ class MujocoArm:
     def _clear_figures(self) -> None:
         self._touching: set[tuple[str, str]] = set()
         self.tracking_error = 0.0         # [rad] largest |q - commanded| of any joint so far
+        self.tracking_displacement = 0.0  # [m] farthest a joint or the tool was from its
+        #                                   commanded place, at the end of a step, so far
         self.standstill_time = math.nan   # [s] from the last lock until the arm stood
         self._braked_at: float | None = None
 

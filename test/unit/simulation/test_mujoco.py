@@ -86,6 +86,10 @@ def test_the_arm_tracks_a_command_and_settles_at_its_end():
     run(arm, 2.0)
     assert not arm.moving and np.max(np.abs(arm.q - goal)) < 1e-3
     assert 0.0 < arm.tracking_error < 0.05
+    # A joint's lag turns the points beyond it about its axis: no point of the skeleton
+    # strays farther than the lever arms to the tool times the largest lag.
+    reach = float(np.sum(arm.robot.tip_lever_arms()))
+    assert 0.0 < arm.tracking_displacement <= arm.tracking_error * reach
 
 
 def test_a_locked_joint_is_held_by_its_brake_while_the_others_move():
