@@ -68,6 +68,8 @@ def test_vertices_close_together_after_sharp_turns_are_timed_without_crawling():
     assert problems == []
     assert timed.times[-1] < 3.0                           # 0.4 rad at 1 rad/s: seconds
     assert np.all(np.diff(timed.times) < 0.5)              # no step crawls
+    stops = np.flatnonzero(np.all(timed.velocities == 0.0, axis=1))
+    assert len(stops) <= 3                                 # the ends, and where it crawled
 
 
 def test_points_a_rounding_error_apart_are_one_point():

@@ -86,17 +86,22 @@ def _time_without_crawling(stretch: np.ndarray, limits: MotionLimits, max_step: 
 
     Where the stretch turns sharply at vertices close together, the spline through them
     bends so much that TOPP-RA may crawl (the last 0.003 rad of a crowded_sheets_100
-    recovery took 36 s): when its timing is slower than the least time of stopping at
-    every vertex, the stretch is also timed that way, and the faster timing is kept.
+    recovery took 36 s). A timing slower than the least time of stopping at every vertex
+    crawls somewhere: the stretch is then also timed as two, stopping at the vertex
+    nearest the slowest step (each part checked again), and the faster timing is kept.
     """
     timed = _time_stretch(stretch, limits, max_step)
     vertices = _distinct(stretch)
     if len(vertices) <= 2 or timed.times[-1] <= _least_time_stopping_at_vertices(vertices,
                                                                                   limits):
         return timed
-    stopping = _one_after_another([_time_stretch(vertices[i:i + 2], limits, max_step)
-                                   for i in range(len(vertices) - 1)], limits)
-    return stopping if stopping.times[-1] < timed.times[-1] else timed
+    slowest = int(np.argmax(np.diff(timed.times)))
+    crawl = 0.5 * (timed.positions[slowest] + timed.positions[slowest + 1])
+    at = 1 + int(np.argmin(np.max(np.abs(vertices[1:-1] - crawl), axis=1)))
+    split = _one_after_another([_time_without_crawling(vertices[:at + 1], limits, max_step),
+                                _time_without_crawling(vertices[at:], limits, max_step)],
+                               limits)
+    return split if split.times[-1] < timed.times[-1] else timed
 
 
 def _least_time_stopping_at_vertices(vertices: np.ndarray, limits: MotionLimits) -> float:
