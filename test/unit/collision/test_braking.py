@@ -8,8 +8,8 @@ from ftplan_ros.core import CollisionChecker
 from ftplan_ros.core.collision.braking import (
     braking_distances,
     lock_point,
-    point_at_level,
     max_safe_speed,
+    point_at_level,
     segment_speeds,
 )
 from ftplan_ros.core.model.motion_limits import default_motion_limits

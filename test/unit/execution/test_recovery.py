@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from ftplan_ros.core import FailureSurface
-from ftplan_ros.core import task_errors
+from ftplan_ros.core import FailureSurface, task_errors
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.execution.actions import Stop
 from ftplan_ros.execution.state import State
