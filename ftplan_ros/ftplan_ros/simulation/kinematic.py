@@ -146,16 +146,20 @@ class KinematicArm:
 
         A stamp ahead of where the arm is on its command schedules the lock for that
         moment (`step` takes it). So does a stamp ahead of the ROS time `now_ns` [ns] (0:
-        unknown) with no command under way, or past the end of the one there is: a drill's
-        lock, stamped on the command it belongs to, may come before that command. None
-        when the joint is locked or scheduled already.
+        unknown) with no command under way: a drill's lock, stamped on the command it
+        belongs to, may come before that command. A stamp past the end of the command
+        under way waits for the later of its ROS time and that end. None when the joint
+        is locked or scheduled already.
         """
         if joint in self.locked or any(joint == j for j, _, _, _ in self._scheduled):
             return None
+        by_clock = (stamp_ns - now_ns) * 1e-9 if stamp_ns and now_ns else 0.0
         if stamp_ns and self.motion is not None and self.motion.covers(stamp_ns):
             ahead = self.motion.time_of(stamp_ns) - self.time
+        elif stamp_ns and self.motion is not None:
+            ahead = max(self.motion.start + self.motion.times[-1] - self.time, by_clock)
         else:
-            ahead = (stamp_ns - now_ns) * 1e-9 if stamp_ns and now_ns else 0.0
+            ahead = by_clock
         if ahead > 0.0:
             self._scheduled.append((joint, angle, stamp_ns, self.time + ahead))
             return Scheduled(joint, ahead)

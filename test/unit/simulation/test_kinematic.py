@@ -162,6 +162,18 @@ def test_a_lock_stamped_past_the_end_of_the_command_there_waits_for_its_own():
     assert sim.locked == {1: pytest.approx(0.5)}
 
 
+def test_a_lock_stamped_now_past_the_end_of_a_lagging_command_waits_for_its_end():
+    """The sim's clock behind ROS time: a lock stamped now (lock_now) is past the end of
+    the command the arm is still on. It lands at that end, where the executor expects
+    the arm, not midway (the executor would then wait for a command that never ends)."""
+    sim = arm()
+    sim.follow(np.array([[1.0, 0.0, 0.0]]), np.array([1.0]), NOW, NOW)
+    run(sim, 0.5)
+    assert sim.lock(0, None, at(1.2), at(1.2)) == Scheduled(0, pytest.approx(0.5))
+    run(sim, 0.6)
+    assert sim.locked == {0: pytest.approx(1.0)}
+
+
 def test_a_scheduled_lock_takes_effect_at_once_when_the_command_is_stopped():
     sim = arm()
     sim.follow(np.array([[1.0, 0.0, 0.0]]), np.array([1.0]), NOW, NOW)
