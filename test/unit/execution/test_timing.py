@@ -70,6 +70,11 @@ def test_vertices_close_together_after_sharp_turns_are_timed_without_crawling():
     assert np.all(np.diff(timed.times) < 0.5)              # no step crawls
     stops = np.flatnonzero(np.all(timed.velocities == 0.0, axis=1))
     assert len(stops) <= 3                                 # the ends, and where it crawled
+    # Cut where it crawls: a last step of 4e-9 rad, a part of its own, keeps its vertex.
+    for tail in ([0.0, 4e-9, 0.0], [3e-9, 0.0, 0.0], [0.0, 0.0, 5e-9]):
+        longer = np.vstack([end[[0, 9, 10, 11]], end[-1] + tail])
+        timed = time_within_limits(longer, default_motion_limits(3))
+        assert len(at_vertices(timed, longer).times) == len(longer)
 
 
 def test_points_a_rounding_error_apart_are_one_point():

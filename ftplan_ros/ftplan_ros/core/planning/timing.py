@@ -42,6 +42,7 @@ _RELATIVE_SLACK = 1e-6       # the checks' numerical tolerance, relative to each
 _SHORTEST = 1e-9             # [rad] points closer than this are one point (as _SAME)
 _SAME = 1e-9                 # [rad] a cut point this close to a vertex is the vertex
 _FEWEST_STEPS = 8            # grid intervals of the shortest path
+_MOST_SPLITS = 8             # cuts of a crawling stretch, before it stops at every vertex
 
 logging.getLogger('toppra').setLevel(logging.WARNING)
 
@@ -63,7 +64,7 @@ def time_within_limits(path: np.ndarray, limits: MotionLimits, max_step: float =
               ) -> TimedPath:
     """Time the polyline `path` (k, n) [rad] within `limits` (see the module docstring)."""
     stretches = _split_where_it_turns_back(np.asarray(path, dtype=float))
-    return _one_after_another([_time_without_crawling(stretch, limits, max_step)
+    return _one_after_another([_time_without_crawling(stretch, limits, max_step, _MOST_SPLITS)
                                for stretch in stretches], limits)
 
 
@@ -81,26 +82,30 @@ def _one_after_another(timed: list[TimedPath], limits: MotionLimits) -> TimedPat
 
 
 def _time_without_crawling(stretch: np.ndarray, limits: MotionLimits, max_step: float,
-                           ) -> TimedPath:
+                           splits: int) -> TimedPath:
     """TOPP-RA's timing of a stretch (k, n) that does not turn back, unless stopping is faster.
 
     Where the stretch turns sharply at vertices close together, the spline through them
     bends so much that TOPP-RA may crawl (the last 0.003 rad of a crowded_sheets_100
     recovery took 36 s). A timing slower than the least time of stopping at every vertex
     crawls somewhere: the stretch is then also timed as two, stopping at the vertex
-    nearest the slowest step (each part checked again), and the faster timing is kept.
+    nearest the slowest step (each part checked again, `splits` more times at most;
+    then stopping at every vertex), and the faster timing is kept.
     """
     timed = _time_stretch(stretch, limits, max_step)
     vertices = _distinct(stretch)
     if len(vertices) <= 2 or timed.times[-1] <= _least_time_stopping_at_vertices(vertices,
                                                                                   limits):
         return timed
-    slowest = int(np.argmax(np.diff(timed.times)))
-    crawl = 0.5 * (timed.positions[slowest] + timed.positions[slowest + 1])
-    at = 1 + int(np.argmin(np.max(np.abs(vertices[1:-1] - crawl), axis=1)))
-    split = _one_after_another([_time_without_crawling(vertices[:at + 1], limits, max_step),
-                                _time_without_crawling(vertices[at:], limits, max_step)],
-                               limits)
+    if splits == 0:
+        parts = [vertices[i:i + 2] for i in range(len(vertices) - 1)]
+    else:
+        slowest = int(np.argmax(np.diff(timed.times)))
+        crawl = 0.5 * (timed.positions[slowest] + timed.positions[slowest + 1])
+        at = 1 + int(np.argmin(np.max(np.abs(vertices[1:-1] - crawl), axis=1)))
+        parts = [vertices[:at + 1], vertices[at:]]
+    split = _one_after_another([_time_without_crawling(part, limits, max_step, splits - 1)
+                                for part in parts], limits)
     return split if split.times[-1] < timed.times[-1] else timed
 
 
@@ -134,7 +139,8 @@ def _time_stretch(path: np.ndarray, limits: MotionLimits, max_step: float) -> Ti
     # TOPP-RA starts and ends at rest on grid points: a path of one step would get no
     # speed at all, so every path gets at least _FEWEST_STEPS.
     span = float(np.sum(np.max(np.abs(np.diff(path, axis=0)), axis=1))) if len(path) > 1 else 0.0
-    step = min(max_step, span / _FEWEST_STEPS) if span > 0.0 else max_step
+    # Not below 2 _SHORTEST: cut points closer than that would be merged, end and all.
+    step = min(max_step, max(span / _FEWEST_STEPS, 2.0 * _SHORTEST)) if span > 0.0 else max_step
     points = _distinct(densify(path, step))
     n = points.shape[1]
     if len(points) < 2:
