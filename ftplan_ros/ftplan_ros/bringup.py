@@ -65,9 +65,10 @@ SIM_STATUS = f'{SIM_NODE}: arm'
 # near its path, not on it, and settles asymptotically (README, "Physics").
 PHYSICS_TOLERANCES = {'arrival_tolerance': 1e-3, 'max_path_offset': 0.02,
                       'stopped_tolerance': 1e-6}
-# The clearance [m] the plan keeps for an arm under physics: its servos put a joint or
-# the tool up to 3.6 mm from where commanded (panda_shelf), and the plans of the
-# kinematic guarantee pass obstacles 0.2 mm apart (README, "Tracking error and clearance").
+# The clearance [m] the plan, and the executor's own certifications, keep for an arm
+# under physics: its servos put a joint or the tool up to 3.6 mm from where commanded
+# (panda_shelf), and the plans of the kinematic guarantee pass obstacles 0.2 mm apart
+# (README, "Tracking error and clearance").
 PHYSICS_MARGIN = 0.005
 INJECTOR_STATUS = f'{INJECTOR_NODE}: drills'
 # How long [s] a run waits, after the executor is done, for the sim's arm to stand (at
@@ -120,7 +121,7 @@ class Suite:
         self.executor_node = ExecutorNode(context=context, parameter_overrides=common + [
             Parameter('max_joint_speed', value=float(speed))] + (
                 [Parameter(name, value=value) for name, value in PHYSICS_TOLERANCES.items()]
-                if sim == 'mujoco' else []))
+                + [Parameter('margin', value=PHYSICS_MARGIN)] if sim == 'mujoco' else []))
         self.sim = SimNode(context=context, parameter_overrides=common + [
             Parameter('max_joint_speed', value=2.0 * float(speed)),
             Parameter('rate', value=float(rate)), Parameter('sim_backend', value=sim)])

@@ -38,6 +38,7 @@ class ExecutorOptions:
     stall_timeout: float = 5.0        # standing still short of the end of a command
     lock_angle_tolerance: float = DEFAULT_LOCK_ANGLE_TOLERANCE  # a lock's angle from the joint's
     approach_time: float = 1.0        # budget of each RRT-Connect attempt of an approach
+    margin: float = 0.0               # [m] clearance the executor's own certifications keep
     nominal_lead: float = 0.05        # from sending the nominal path's command to its stamp
 
     def scaled(self, limits: MotionLimits) -> MotionLimits:

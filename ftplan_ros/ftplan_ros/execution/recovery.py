@@ -33,15 +33,18 @@ class WayOn:
 
 
 def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
-                   max_offset: float, planner: ApproachPlanner) -> WayOn:
+                   max_offset: float, planner: ApproachPlanner, max_step_to_goal: float,
+                   ) -> WayOn:
     """Recover in the run's S_F from q (n,), where its locked joint `name` stopped.
 
-    `start` (n,) is where on the nominal path the arm braked from (q when it stopped on
-    the path): the path goes straight back there, inside the certified braking box, then
-    on in S_F. `max_offset` [rad] is how far `start` may lie from the nominal path. A
-    brake that slipped past the path's range of the joint gets S_F's path moved by the
-    slip, which ends off the goal: it goes on to the goal with the joint where it is,
-    and `planner` must certify the whole path now, or the arm stays where it stopped.
+    `start` (n,) is where on the nominal path the arm braked from (certified: in a
+    braking box, or by the executor), or q: the path goes straight back there, then on
+    in S_F. `max_offset` [rad] is how far `start` may lie from the nominal path; the step
+    from there onto it is certified by `planner` now. A brake that slipped past the
+    path's range of the joint gets S_F's path moved by the slip, which ends off the goal:
+    it goes on to a goal configuration with the joint where it is, at most
+    `max_step_to_goal` [rad] away, and `planner` certifies the whole moved path now. What
+    is not certified keeps the arm where it stopped.
     """
     progress, tolerated = ex.lock_progress, ex.plan.tolerated
     try:
@@ -54,13 +57,17 @@ def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
         ' (not tolerated by this plan, but S_F holds a recovery path)'
     path, length = rescue.path, rescue.length
     if rescue.slip != 0.0:
-        path = _on_to_the_goal(ex, path, rescue.joint)
+        path = _on_to_the_goal(ex, path, rescue.joint, max_step_to_goal)
         if path is None or not planner.certify(path):
             return WayOn(None, float('nan'), f'{name} locked {abs(rescue.slip):.4f} rad past '
                          f'the nominal path\'s range of it, at {progress:.1%} of the path, and '
                          'S_F\'s recovery path moved there is not certified clear; the arm is '
                          'stopped there')
         length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+    elif np.any(path[0] != path[1]) and not planner.certify(path[:2]):
+        return WayOn(None, float('nan'), f'{name} locked at {progress:.1%} of the nominal path '
+                     f'{float(np.max(np.abs(path[1] - path[0]))):.4f} rad off it, and the move '
+                     'onto it is not certified clear; the arm is stopped there')
     if np.any(start != q):
         path = np.vstack([q[None, :], path])
         length += float(np.linalg.norm(start - q))
@@ -69,13 +76,17 @@ def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
                  f'{length:.3f} rad)')
 
 
-def _on_to_the_goal(ex: Execution, path: np.ndarray, joint: int) -> np.ndarray | None:
+def _on_to_the_goal(ex: Execution, path: np.ndarray, joint: int, max_step: float,
+                    ) -> np.ndarray | None:
     """Return `path` (k, n) [rad] and then its end moved onto the goal, `joint` held.
 
-    None when Newton's method finds no goal configuration from the end.
+    None when Newton's method finds no goal configuration within `max_step` [rad] of the
+    end (it may converge on a far branch of the goal's preimage).
     """
     end = project_to_preimage(ex.plan.robot, ex.plan.goal, path[-1], fixed_joint=joint)
-    return None if end is None else np.vstack([path, end[None, :]])
+    if end is None or np.max(np.abs(end - path[-1])) > max_step:
+        return None
+    return np.vstack([path, end[None, :]])
 
 
 def with_joints_left(planner: ApproachPlanner, ex: Execution, q: np.ndarray, name: str,

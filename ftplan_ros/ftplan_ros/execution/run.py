@@ -275,7 +275,7 @@ class Run:
             ex.lock_progress, _ = progress_along(ex.nominal, start)
             ex.progress = ex.lock_progress
             way = within_surface(ex, q, start, name, options.max_path_offset,
-                                 self._planner())
+                                 self._planner(), options.path_tolerance)
         if way.path is None:
             self.fail(way.message, now)  # the arm stands still: keep it so
             return
@@ -352,7 +352,8 @@ class Run:
     def _planner(self) -> ApproachPlanner:
         """Return the core's approach planner over the current obstacles, for the run's plan."""
         return ApproachPlanner(self.host.obstacles.checker,
-                               ApproachOptions(rrt_time=self.host.options.approach_time),
+                               ApproachOptions(rrt_time=self.host.options.approach_time,
+                                               margin=self.host.options.margin),
                                robot=self.record.plan.robot)
 
 

@@ -162,6 +162,10 @@ class ExecutorNode(Node):
         declare(self, 'approach_time', _DEFAULTS.approach_time,
                 'Budget [s] of each of the three RRT-Connect attempts of an approach (or, '
                 'after a lock during it, of a path to the goal with the joints left).')
+        declare(self, 'margin', _DEFAULTS.margin,
+                'Clearance [m] the executor\'s own certifications keep: the approach, a move '
+                'back to the nominal path after a lock, a recovery path moved to where a brake '
+                'holds. Give it the planner\'s margin.')
         declare(self, 'nominal_lead', _DEFAULTS.nominal_lead,
                 'Seconds from sending the command of the nominal path to its start (its '
                 'stamp): time for a drill\'s lock, scheduled on that command (injector), to '
@@ -171,6 +175,7 @@ class ExecutorNode(Node):
                 'idle).', read_only=True)
         validators = {field.name: positive for field in fields(ExecutorOptions)}
         validators['status_rate'] = positive
+        validators['margin'] = non_negative
         validators.update(declare_motion_limit_parameters(
             self, _DEFAULTS.max_velocity_scaling_factor,
             _DEFAULTS.max_acceleration_scaling_factor))

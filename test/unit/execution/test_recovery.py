@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ftplan_ros.core import FailureSurface, task_errors
+from ftplan_ros.core.collision.braking import point_at_level
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.execution.actions import Stop
 from ftplan_ros.execution.state import State
@@ -197,3 +198,18 @@ def test_a_lock_located_past_the_paths_range_of_its_angle_still_ends_on_the_goal
     [command] = commands(rig.stand())
     assert np.all(command.path[:, 1] == locked_at[1])
     assert task_errors(rig.plan.robot, rig.plan.goal, command.path[-1])[0] < 1e-6
+
+
+def test_a_stop_off_the_path_whose_way_onto_it_is_blocked_stays_there(make_rig):
+    """A review of issue 37's fixes: stopped 0.015 rad off the path in joint3, outside
+    every braking box, with a 0.5 mm obstacle where the tool passes on the way back: the
+    move back was refused, yet the command stepped from there onto S_F uncertified."""
+    rig = make_rig(max_path_offset=0.02)
+    lock_on_nominal(rig)
+    stop = rig.q + [0.0, 0.0, -0.015]
+    on_path = point_at_level(rig.executor.execution.nominal_command.path, stop, 1, 0.02)
+    halfway = rig.scene.robot.skeleton((0.5 * (stop + on_path))[None, :])[0][-1]
+    rig.add_obstacle(halfway[:2], 0.0005)
+    rig.q = stop
+    assert failure(rig.stand()).endswith('the move onto it is not certified clear; the arm is '
+                                         'stopped there')
