@@ -289,10 +289,11 @@ class Run:
         The point of the locked joint's angle (within `max_path_offset`) whose certified
         braking box holds q (core/collision/braking.py). An arm under physics may stop
         outside every box: its locked joint lags its command, and where that joint hardly
-        moves along the path, the point of its angle lies far back. The nearest point of
-        the angle is then taken if it lies within `path_tolerance` (the tracking error the
-        executor accepts) and the straight move back to it is certified now. Else q itself
-        (the arm stopped on the path, or recovery refuses it).
+        moves along the path, the point of its angle lies far back. The point of the angle
+        nearest along the path to where the arm stands is then taken, among those within
+        `path_tolerance` (the tracking error the executor accepts), if the straight move
+        back to it is certified now. Else q itself (the arm stopped on the path, or
+        recovery refuses it).
         """
         ex = self.record
         sent = ex.nominal_command
@@ -302,9 +303,9 @@ class Run:
         offset = self.host.options.max_path_offset
         p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint, offset)
         if p is None:
-            p = point_at_level(sent.path, q, ex.locked_joint, offset)
-            if p is None or np.max(np.abs(q - p)) > self.host.options.path_tolerance or \
-                    not self._planner().certify(np.stack([q, p])):
+            p = point_at_level(sent.path, q, ex.locked_joint, offset,
+                               self.host.options.path_tolerance, progress_along(sent.path, q)[0])
+            if p is None or not self._planner().certify(np.stack([q, p])):
                 return q
         return p
 

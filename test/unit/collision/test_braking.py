@@ -119,5 +119,14 @@ def test_a_brake_holding_past_the_paths_range_of_the_joint_finds_it_within_the_t
 def test_a_stop_outside_every_braking_box_has_no_lock_point():
     stop = np.array([0.3, 0.1, 0.0])     # 0.25 rad from the path in joint 0
     assert lock_point(PATH, SPEEDS, DECELERATION, stop, 1, tolerance=1e-3) is None
-    assert np.allclose(point_at_level(PATH, stop, 1), [0.05, 0.1, 0.0])  # its angle's point
-    assert point_at_level(PATH, np.array([0.3, 0.25, 0.0]), 1, tolerance=1e-3) is None
+    assert np.allclose(point_at_level(PATH, stop, 1, 0.0, 0.3, 0.4), [0.05, 0.1, 0.0])
+    assert point_at_level(PATH, stop, 1, 0.0, 0.2, 0.4) is None     # 0.25 rad away
+    assert point_at_level(PATH, np.array([0.3, 0.25, 0.0]), 1, 1e-3, 1.0, 0.5) is None
+
+
+def test_the_point_of_an_angle_the_path_passes_twice_is_the_one_nearest_along_it():
+    """Joint 1 goes up to 0.2 and back down: 0.1 rad at a quarter and at three quarters."""
+    path = np.array([[0.0, 0.0, 0.0], [0.05, 0.2, 0.0], [0.1, 0.0, 0.0]])
+    stop = np.array([0.05, 0.1, 0.0])
+    assert np.allclose(point_at_level(path, stop, 1, 0.0, 0.1, 0.2), [0.025, 0.1, 0.0])
+    assert np.allclose(point_at_level(path, stop, 1, 0.0, 0.1, 0.8), [0.075, 0.1, 0.0])

@@ -7,6 +7,7 @@ from ftplan_ros.core import FailureSurface, task_errors
 from ftplan_ros.core.collision.braking import point_at_level
 from ftplan_ros.core.model.paths import point_at_fraction
 from ftplan_ros.execution.actions import Stop
+from ftplan_ros.execution.motion import progress_along
 from ftplan_ros.execution.state import State
 
 from .rig import commands, failure, final
@@ -207,7 +208,8 @@ def test_a_stop_off_the_path_whose_way_onto_it_is_blocked_stays_there(make_rig):
     rig = make_rig(max_path_offset=0.02)
     lock_on_nominal(rig)
     stop = rig.q + [0.0, 0.0, -0.015]
-    on_path = point_at_level(rig.executor.execution.nominal_command.path, stop, 1, 0.02)
+    sent = rig.executor.execution.nominal_command.path
+    on_path = point_at_level(sent, stop, 1, 0.02, 0.1, progress_along(sent, stop)[0])
     halfway = rig.scene.robot.skeleton((0.5 * (stop + on_path))[None, :])[0][-1]
     rig.add_obstacle(halfway[:2], 0.0005)
     rig.q = stop

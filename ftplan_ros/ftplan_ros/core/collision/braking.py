@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.paths import cumulative_fractions
 from .checker import CollisionChecker
 
 _ROUNDING = 1e-6  # [m] as certification.py: the rounding of a computed clearance
@@ -109,34 +110,42 @@ def lock_point(positions: np.ndarray, speeds: np.ndarray, deceleration: np.ndarr
     a, b = positions[:-1], positions[1:]
     reach = braking_distances(np.asarray(speeds, dtype=float), deceleration)
     inside = np.all((q >= np.minimum(a, b) - reach) & (q <= np.maximum(a, b) + reach), axis=1)
-    return _nearest_at_level(positions, q, joint, tolerance, inside)
+    best, nearest = None, np.inf
+    for k, _, p in _points_at_level(positions, q, joint, tolerance):
+        gap = float(np.max(np.abs(q - p)))
+        if inside[k] and gap < nearest:
+            best, nearest = p, gap
+    return best
 
 
-def point_at_level(positions: np.ndarray, q: np.ndarray, joint: int,
-                   tolerance: float = 0.0) -> np.ndarray | None:
-    """Return the point p of the path (k, n) [rad] with p[joint] = q[joint] nearest q (n,).
+def point_at_level(positions: np.ndarray, q: np.ndarray, joint: int, tolerance: float,
+                   reach: float, near: float) -> np.ndarray | None:
+    """Return the point p of the path (k, n) [rad] with p[joint] = q[joint] nearest `near`.
 
-    Nearest in the ∞-norm; None when no segment reaches the level (within `tolerance`
-    [rad] beyond its range, as `lock_point`). Unlike `lock_point`, p need not hold q in a
-    braking box: the move from q back to p is then the caller's to certify.
+    Nearest along the path to its fraction `near` (0..1), among the points within
+    `reach` [rad] of q (n,) in every joint; None when there is none. A segment reaches
+    the level up to `tolerance` [rad] beyond its range, as in `lock_point`. Unlike
+    `lock_point`, p need not hold q in a braking box: the move from q to p is then the
+    caller's to certify.
     """
-    return _nearest_at_level(positions, q, joint, tolerance, np.ones(len(positions) - 1, bool))
+    fractions = cumulative_fractions(positions)
+    best, nearest = None, np.inf
+    for k, share, p in _points_at_level(positions, q, joint, tolerance):
+        along = abs(fractions[k] + share * (fractions[k + 1] - fractions[k]) - near)
+        if float(np.max(np.abs(q - p))) <= reach and along < nearest:
+            best, nearest = p, along
+    return best
 
 
-def _nearest_at_level(positions: np.ndarray, q: np.ndarray, joint: int, tolerance: float,
-                      candidates: np.ndarray) -> np.ndarray | None:
-    """`lock_point` and `point_at_level` among the segments `candidates` (k-1,) bool."""
+def _points_at_level(positions: np.ndarray, q: np.ndarray, joint: int, tolerance: float):
+    """Yield (segment k, share along it, point (n,)) where the path (k, n) has q's `joint`."""
     a, b = positions[:-1], positions[1:]
     level = q[joint]
     low = np.minimum(a[:, joint], b[:, joint]) - tolerance
     high = np.maximum(a[:, joint], b[:, joint]) + tolerance
-    best, nearest = None, np.inf
-    for k in np.flatnonzero(candidates & (low <= level) & (level <= high)):
+    for k in np.flatnonzero((low <= level) & (level <= high)):
         rise = b[k, joint] - a[k, joint]
         share = 0.0 if rise == 0.0 else min(1.0, max(0.0, (level - a[k, joint]) / rise))
         p = a[k] + share * (b[k] - a[k])
         p[joint] = level
-        gap = float(np.max(np.abs(q - p)))
-        if gap < nearest:
-            best, nearest = p, gap
-    return best
+        yield int(k), share, p
