@@ -290,7 +290,8 @@ class Run:
         braking box holds q (core/collision/braking.py). An arm under physics may stop
         outside every box: its locked joint lags its command, and where that joint hardly
         moves along the path, the point of its angle lies far back. The point of the angle
-        nearest along the path to where the arm stands is then taken, among those within
+        nearest along the path to where the arm was when the joint locked (`progress`, not
+        updated since: the arm braked on) is then taken, among those within
         `path_tolerance` (the tracking error the executor accepts), if the straight move
         back to it is certified now. Else q itself (the arm stopped on the path, or
         recovery refuses it).
@@ -304,7 +305,7 @@ class Run:
         p = lock_point(sent.path, speeds, ex.braking, q, ex.locked_joint, offset)
         if p is None:
             p = point_at_level(sent.path, q, ex.locked_joint, offset,
-                               self.host.options.path_tolerance, progress_along(sent.path, q)[0])
+                               self.host.options.path_tolerance, ex.progress)
             if p is None or not self._planner().certify(np.stack([q, p])):
                 return q
         return p
