@@ -66,7 +66,7 @@ SIM_STATUS = f'{SIM_NODE}: arm'
 PHYSICS_TOLERANCES = {'arrival_tolerance': 1e-3, 'max_path_offset': 0.02,
                       'stopped_tolerance': 1e-6}
 # The clearance [m] the plan, and the executor's own certifications, keep for an arm
-# under physics: its servos put a joint or the tool up to 3.6 mm from where commanded
+# under physics: its servos put a joint or the tool up to 4.2 mm from where commanded
 # (panda_shelf), and the plans of the kinematic guarantee pass obstacles 0.2 mm apart
 # (README, "Tracking error and clearance").
 PHYSICS_MARGIN = 0.005
