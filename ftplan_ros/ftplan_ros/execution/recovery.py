@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ftplan_ros.core import InputError, recover
+from ftplan_ros.core.model.paths import path_length
 from ftplan_ros.core.paper.manifolds import project_to_preimage
 from ftplan_ros.core.planning.approach import ApproachPlanner
 
@@ -63,7 +64,7 @@ def within_surface(ex: Execution, q: np.ndarray, start: np.ndarray, name: str,
                          f'the nominal path\'s range of it, at {progress:.1%} of the path, and '
                          'S_F\'s recovery path moved there is not certified clear; the arm is '
                          'stopped there')
-        length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+        length = path_length(path)
     elif np.any(path[0] != path[1]) and not planner.certify(path[:2]):
         return WayOn(None, float('nan'), f'{name} locked at {progress:.1%} of the nominal path '
                      f'{float(np.max(np.abs(path[1] - path[0]))):.4f} rad off it, and the move '

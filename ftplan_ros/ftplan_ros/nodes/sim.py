@@ -432,10 +432,11 @@ class SimNode(Node):
             if not self.arm.moving and not self._reported_stop:
                 self._reported_stop = True
                 self._report_stop()
-            elif time.monotonic() - self._last_report >= 1.0 and self.arm.moving:
-                self.report('moving')
             elif time.monotonic() - self._last_report >= 1.0:
-                self._report_stop(measure=False)  # a standing arm may creep (MuJoCo): judge again
+                if self.arm.moving:
+                    self.report('moving')
+                else:  # a standing arm may still creep (MuJoCo): judge it again
+                    self._report_stop(measure=False)
         except Exception as error:  # noqa: BLE001 - a callback must never raise
             self.get_logger().error(traceback.format_exc())
             self.diagnostics.report('arm', 'ERROR', f'internal sim error: {error!r}')
